@@ -1,0 +1,226 @@
+//! Command-line definitions (clap derive). One variant per command of SPEC §5.
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use sightline_geom::ViewCell;
+use std::path::PathBuf;
+
+#[derive(Parser, Debug)]
+#[command(name = "sightline", version, about = "Conservative potentially visible sets for cities", long_about = None)]
+pub struct Cli {
+    /// Hide progress bars.
+    #[arg(long, global = true)]
+    pub quiet: bool,
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Coordinate reference of inputs that may be geographic.
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum CrsArg {
+    Auto,
+    Projected,
+    Wgs84,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct SceneArg {
+    /// Scene file: .geojson, CityJSON (.json/.city.json/.zip), .osm.pbf, .obj, .gltf/.glb.
+    pub scene: PathBuf,
+    /// Coordinate reference of the input (GeoJSON/OSM): detect, projected metres, or WGS84 lon/lat.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub crs: CrsArg,
+}
+
+fn parse_cell(s: &str) -> Result<ViewCell, String> {
+    s.parse::<ViewCell>().map_err(|e| e.to_string())
+}
+
+fn parse_point(s: &str) -> Result<[f64; 3], String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|p| {
+            p.trim()
+                .parse::<f64>()
+                .map_err(|_| format!("'{p}' is not a number"))
+        })
+        .collect::<Result<_, _>>()?;
+    match v.as_slice() {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok([*x, *y, *z]),
+        [_, _, _] => Err("coordinates must be finite".into()),
+        _ => Err(format!("expected X,Y,Z, got {} numbers", v.len())),
+    }
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Run the main job end to end on an embedded default scene.
+    Demo {
+        /// Output folder.
+        #[arg(short, long, default_value = "sightline-demo")]
+        out: PathBuf,
+    },
+    /// Generate a scene (deterministic for a seed) as GeoJSON.
+    Generate {
+        #[arg(value_enum)]
+        kind: GenerateKind,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Size: number of buildings (city, metropolis) or trees (forest).
+        #[arg(long)]
+        size: Option<usize>,
+        #[arg(short, long)]
+        out: PathBuf,
+    },
+    /// Counts, bounds and warnings of a scene.
+    Info {
+        #[command(flatten)]
+        scene: SceneArg,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Cover the scene with square viewcells.
+    Cells {
+        #[command(flatten)]
+        scene: SceneArg,
+        /// Cell side in metres.
+        #[arg(long, default_value_t = 50.0)]
+        size: f64,
+        /// Eye-height range, `Z0:Z1`.
+        #[arg(long, default_value = "1.5:2.0")]
+        z: String,
+        /// Keep only cells meeting this GeoJSON polygon (e.g. the streets).
+        #[arg(long)]
+        clip: Option<PathBuf>,
+        #[arg(short, long)]
+        out: PathBuf,
+    },
+    /// PVS of one viewcell with one method.
+    Pvs {
+        #[command(flatten)]
+        scene: SceneArg,
+        /// The viewcell `X0,Y0,Z0,X1,Y1,Z1`.
+        #[arg(long, value_parser = parse_cell, allow_hyphen_values = true)]
+        cell: ViewCell,
+        #[arg(long, default_value = "erosion")]
+        method: String,
+        #[arg(long)]
+        resolution: Option<u32>,
+        /// ext-proj: run the occlusion sweep.
+        #[arg(long)]
+        sweep: bool,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Ground-truth visible set of one viewcell by dense sampling.
+    Truth {
+        #[command(flatten)]
+        scene: SceneArg,
+        #[arg(long, value_parser = parse_cell, allow_hyphen_values = true)]
+        cell: ViewCell,
+        #[arg(long)]
+        samples: Option<u32>,
+        #[arg(long)]
+        resolution: Option<u32>,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Compute the PVS of every cell of a cells.json into a .pvs file.
+    Build {
+        #[command(flatten)]
+        scene: SceneArg,
+        #[arg(long)]
+        cells: PathBuf,
+        #[arg(long, default_value = "erosion")]
+        method: String,
+        #[arg(long)]
+        resolution: Option<u32>,
+        #[arg(short, long)]
+        out: PathBuf,
+        /// Continue an interrupted build from its journal.
+        #[arg(long)]
+        resume: bool,
+        /// Build only shard I of N (`I/N`, or `auto/N` from JOB_COMPLETION_INDEX / SLURM_ARRAY_TASK_ID).
+        #[arg(long)]
+        shard: Option<String>,
+    },
+    /// Merge shard .pvs files into one.
+    Merge {
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
+        #[arg(short, long)]
+        out: PathBuf,
+    },
+    /// PVS of the cell containing a point.
+    Query {
+        pvs: PathBuf,
+        /// The point `X,Y,Z`.
+        #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
+        at: [f64; 3],
+        #[arg(long)]
+        json: bool,
+    },
+    /// Recompute ground truth on some cells and report missed/over of a method or a .pvs.
+    Check {
+        #[command(flatten)]
+        scene: SceneArg,
+        /// A .pvs file to check (otherwise --method is run on --cells).
+        pvs: Option<PathBuf>,
+        #[arg(long)]
+        method: Option<String>,
+        /// A cells.json (with --method), or a number of cells to sample from the .pvs.
+        #[arg(long)]
+        cells: Option<String>,
+        #[arg(long)]
+        resolution: Option<u32>,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Top-down PNG of a scene with a cell's PVS classified against the ground truth.
+    Map {
+        #[command(flatten)]
+        scene: SceneArg,
+        #[arg(long, value_parser = parse_cell, allow_hyphen_values = true)]
+        cell: ViewCell,
+        #[arg(long)]
+        method: Option<String>,
+        #[arg(long)]
+        pvs: Option<PathBuf>,
+        #[arg(short, long)]
+        out: PathBuf,
+    },
+    /// Reproduce the papers' experiments; write a Markdown report with plots.
+    Bench {
+        #[arg(long, default_value = "quick")]
+        suite: String,
+        /// Extra real scenes to include.
+        #[arg(long)]
+        scene: Vec<PathBuf>,
+        /// Comma-separated method names (default: all conservative methods).
+        #[arg(long)]
+        methods: Option<String>,
+        #[arg(short, long, default_value = "report")]
+        out: PathBuf,
+    },
+    /// Serve a scene (and optionally a .pvs) to walkthrough clients.
+    Serve {
+        #[command(flatten)]
+        scene: SceneArg,
+        pvs: Option<PathBuf>,
+        #[arg(long, default_value = "127.0.0.1:8080")]
+        addr: String,
+        #[arg(long, default_value_t = 100.0)]
+        cell_size: f64,
+        #[arg(long, default_value = "erosion")]
+        method: String,
+        /// Require this token (`?token=` or `Authorization: Bearer`).
+        #[arg(long)]
+        token: Option<String>,
+    },
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum GenerateKind {
+    City,
+    Forest,
+    Metropolis,
+}

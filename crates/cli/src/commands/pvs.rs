@@ -1,0 +1,58 @@
+//! `sightline pvs`: the PVS of one viewcell with one method.
+
+use crate::cli::SceneArg;
+use crate::common::{load_scene, print_json};
+use serde::Serialize;
+use sightline_geom::ViewCell;
+use sightline_methods::{create, MethodOptions};
+use std::sync::Arc;
+use std::time::Instant;
+
+#[derive(Serialize)]
+struct PvsReport<'a> {
+    method: &'a str,
+    cell: ViewCell,
+    objects: usize,
+    visible: Vec<u32>,
+    seconds: f64,
+}
+
+pub fn pvs(
+    scene_arg: &SceneArg,
+    cell: &ViewCell,
+    method: &str,
+    resolution: Option<u32>,
+    sweep: bool,
+    json: bool,
+) -> anyhow::Result<()> {
+    let scene = Arc::new(load_scene(scene_arg)?);
+    let opts = MethodOptions {
+        resolution_px: resolution,
+        sweep,
+        ..Default::default()
+    };
+    let m = create(method, scene.clone(), &opts)?;
+    let t = Instant::now();
+    let visible = m.pvs(cell)?;
+    let seconds = t.elapsed().as_secs_f64();
+    let report = PvsReport {
+        method: m.name(),
+        cell: *cell,
+        objects: scene.objects.len(),
+        visible,
+        seconds,
+    };
+    if json {
+        print_json(&report)
+    } else {
+        println!(
+            "{}: {} of {} objects potentially visible from {} ({:.1} ms)",
+            report.method,
+            report.visible.len(),
+            report.objects,
+            report.cell,
+            seconds * 1e3
+        );
+        Ok(())
+    }
+}

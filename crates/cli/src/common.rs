@@ -1,0 +1,57 @@
+//! Helpers shared by the commands: scene loading, progress bars, JSON output.
+#![allow(dead_code)] // used by the commands as they land
+
+use crate::cli::{CrsArg, SceneArg};
+use anyhow::Context;
+use indicatif::{ProgressBar, ProgressStyle};
+use sightline_scene::import::{Crs, ImportOptions};
+use sightline_scene::Scene;
+use std::io::IsTerminal;
+
+/// Load the scene named on the command line.
+pub fn load_scene(arg: &SceneArg) -> anyhow::Result<Scene> {
+    let crs = match arg.crs {
+        CrsArg::Auto => Crs::Auto,
+        CrsArg::Projected => Crs::Projected,
+        CrsArg::Wgs84 => Crs::Wgs84,
+    };
+    sightline_scene::import::load(&arg.scene, &ImportOptions { crs })
+        .with_context(|| format!("cannot load {}", arg.scene.display()))
+}
+
+/// A progress bar over `len` items, hidden when quiet or not on a terminal.
+pub fn progress(len: u64, quiet: bool, what: &str) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let pb = ProgressBar::new(len);
+    pb.set_style(
+        ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} ({per_sec}, eta {eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    pb.set_message(what.to_string());
+    pb
+}
+
+/// Print a value as pretty JSON on stdout.
+pub fn print_json<T: serde::Serialize>(v: &T) -> anyhow::Result<()> {
+    println!("{}", serde_json::to_string_pretty(v)?);
+    Ok(())
+}
+
+/// Write `bytes` to `path` atomically: a temporary file in the same folder, then rename.
+pub fn write_atomic(path: &std::path::Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty());
+    if let Some(d) = dir {
+        std::fs::create_dir_all(d).with_context(|| format!("cannot create {}", d.display()))?;
+    }
+    let tmp = path.with_extension(format!(
+        "{}.tmp{}",
+        path.extension().and_then(|e| e.to_str()).unwrap_or(""),
+        std::process::id()
+    ));
+    std::fs::write(&tmp, bytes).with_context(|| format!("cannot write {}", tmp.display()))?;
+    std::fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(())
+}
