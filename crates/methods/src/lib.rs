@@ -19,6 +19,11 @@
 //! assert_eq!(all.pvs(&cell).unwrap(), vec![0]);
 //! ```
 
+pub mod dual_ray;
+pub mod erosion;
+pub mod ext_proj;
+pub mod sampled;
+
 use serde::{Deserialize, Serialize};
 use sightline_geom::ViewCell;
 use sightline_scene::Scene;
@@ -89,10 +94,16 @@ pub fn create(
     scene: Arc<Scene>,
     opts: &MethodOptions,
 ) -> Result<Box<dyn VisibilityMethod>, MethodError> {
-    let _ = opts;
     match name {
+        "erosion" => erosion::create("erosion", scene, opts),
+        "erosion-segment" => erosion::create("erosion-segment", scene, opts),
+        "erosion-cell" => erosion::create("erosion-cell", scene, opts),
+        "shrink-sphere" => erosion::create("shrink-sphere", scene, opts),
+        "dual-ray" => dual_ray::create("dual-ray", scene, opts),
+        "dual-ray-exact" => dual_ray::create("dual-ray-exact", scene, opts),
+        "ext-proj" => ext_proj::create("ext-proj", scene, opts),
+        "sampled" => sampled::create("sampled", scene, opts),
         "all" => Ok(Box::new(All { scene })),
-        n if METHOD_NAMES.contains(&n) => Err(MethodError::NotImplemented(n.to_string())),
         n => Err(MethodError::Unknown(n.to_string())),
     }
 }

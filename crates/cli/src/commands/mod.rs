@@ -1,39 +1,36 @@
-//! One module per command (or family of commands).
+//! One module per command (or family of commands). Each `run` receives its own
+//! `Command` variant.
 
+mod bench;
+mod build;
+mod cells;
+mod check;
+mod demo;
+mod generate;
+mod info;
+mod map;
 mod pvs;
+mod serve;
+mod truth;
 
 use crate::cli::{Cli, Command};
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     let quiet = cli.quiet;
-    let _ = quiet;
     match cli.command {
-        Command::Pvs {
-            scene,
-            cell,
-            method,
-            resolution,
-            sweep,
-            json,
-        } => pvs::pvs(&scene, &cell, &method, resolution, sweep, json),
-        other => anyhow::bail!("{} is not implemented yet", command_name(&other)),
-    }
-}
-
-fn command_name(c: &Command) -> &'static str {
-    match c {
-        Command::Demo { .. } => "demo",
-        Command::Generate { .. } => "generate",
-        Command::Info { .. } => "info",
-        Command::Cells { .. } => "cells",
-        Command::Pvs { .. } => "pvs",
-        Command::Truth { .. } => "truth",
-        Command::Build { .. } => "build",
-        Command::Merge { .. } => "merge",
-        Command::Query { .. } => "query",
-        Command::Check { .. } => "check",
-        Command::Map { .. } => "map",
-        Command::Bench { .. } => "bench",
-        Command::Serve { .. } => "serve",
+        c @ Command::Demo { .. } => demo::run(c, quiet),
+        c @ Command::Generate { .. } => generate::run(c, quiet),
+        c @ Command::Info { .. } => info::run(c, quiet),
+        c @ Command::Cells { .. } => cells::run(c, quiet),
+        c @ Command::Pvs { .. } => pvs::run(c, quiet),
+        c @ Command::Truth { .. } => truth::run(c, quiet),
+        // build, merge and query share the store's code.
+        c @ (Command::Build { .. } | Command::Merge { .. } | Command::Query { .. }) => {
+            build::run(c, quiet)
+        }
+        c @ Command::Check { .. } => check::run(c, quiet),
+        c @ Command::Map { .. } => map::run(c, quiet),
+        c @ Command::Bench { .. } => bench::run(c, quiet),
+        c @ Command::Serve { .. } => serve::run(c, quiet),
     }
 }

@@ -1,6 +1,6 @@
 //! `sightline pvs`: the PVS of one viewcell with one method.
 
-use crate::cli::SceneArg;
+use crate::cli::{Command, SceneArg};
 use crate::common::{load_scene, print_json};
 use serde::Serialize;
 use sightline_geom::ViewCell;
@@ -17,7 +17,22 @@ struct PvsReport<'a> {
     seconds: f64,
 }
 
-pub fn pvs(
+pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
+    let Command::Pvs {
+        scene,
+        cell,
+        method,
+        resolution,
+        sweep,
+        json,
+    } = cmd
+    else {
+        unreachable!("dispatched by commands::run")
+    };
+    pvs(&scene, &cell, &method, resolution, sweep, json)
+}
+
+fn pvs(
     scene_arg: &SceneArg,
     cell: &ViewCell,
     method: &str,

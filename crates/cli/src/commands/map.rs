@@ -1,0 +1,8 @@
+//! `sightline map`.
+
+use crate::cli::Command;
+
+pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
+    let _ = (cmd, quiet);
+    anyhow::bail!("`sightline map` is not implemented yet")
+}
