@@ -1,0 +1,259 @@
+//! Depth and object-id buffers, and the draw calls.
+
+use crate::coverage::{self, Prepared};
+use crate::pyramid::DepthPyramid;
+use crate::view::{ScreenVertex, View};
+use crate::{Coverage, MAX_INPUT_VERTS};
+use glam::DVec3;
+
+/// The id of a pixel nothing was drawn on.
+pub const NO_ID: u32 = u32::MAX;
+
+/// A depth buffer (view depth in metres, `+∞` where empty) and an object-id buffer
+/// ([`NO_ID`] where empty), row-major, row 0 at the view window's lower edge.
+///
+/// The depth test keeps the strictly nearer value: with [`Coverage::Inner`] a pixel
+/// receives an upper bound of the occluder's depth in it, with [`Coverage::Outer`] a
+/// lower bound, with [`Coverage::Standard`] the depth at the pixel centre.
+#[derive(Clone, Debug)]
+pub struct Framebuffer {
+    pub width: u32,
+    pub height: u32,
+    pub depth: Vec<f32>,
+    pub ids: Vec<u32>,
+    scratch: Vec<ScreenVertex>,
+    pieces: Vec<Prepared>,
+}
+
+impl Framebuffer {
+    /// An empty buffer of `width × height` pixels.
+    pub fn new(width: u32, height: u32) -> Self {
+        let n = width as usize * height as usize;
+        Framebuffer {
+            width,
+            height,
+            depth: vec![f32::INFINITY; n],
+            ids: vec![NO_ID; n],
+            scratch: Vec::with_capacity(2 * MAX_INPUT_VERTS),
+            pieces: Vec::new(),
+        }
+    }
+
+    /// An empty buffer matching `view`'s pixel grid.
+    pub fn for_view(view: &View) -> Self {
+        Self::new(view.width_px, view.height_px)
+    }
+
+    /// Empty every pixel.
+    pub fn clear(&mut self) {
+        self.depth.fill(f32::INFINITY);
+        self.ids.fill(NO_ID);
+    }
+
+    #[inline]
+    fn index(&self, i: u32, j: u32) -> usize {
+        j as usize * self.width as usize + i as usize
+    }
+
+    /// Depth at pixel `(i, j)`.
+    pub fn depth_at(&self, i: u32, j: u32) -> f32 {
+        self.depth[self.index(i, j)]
+    }
+
+    /// Object id at pixel `(i, j)`.
+    pub fn id_at(&self, i: u32, j: u32) -> u32 {
+        self.ids[self.index(i, j)]
+    }
+
+    /// The distinct ids drawn, sorted.
+    pub fn ids_seen(&self) -> Vec<u32> {
+        let mut v: Vec<u32> = self.ids.iter().copied().filter(|&i| i != NO_ID).collect();
+        v.sort_unstable();
+        v.dedup();
+        v
+    }
+
+    /// Draw a planar convex world polygon (a triangle, a wall quad, …) seen in `view`,
+    /// clipped at the near plane. Polygons with many vertices are split into fans.
+    pub fn draw_polygon(&mut self, view: &View, poly: &[DVec3], id: u32, coverage: Coverage) {
+        if poly.len() > MAX_INPUT_VERTS {
+            for chunk in fan(poly) {
+                self.draw_polygon(view, &chunk, id, coverage);
+            }
+            return;
+        }
+        let mut scratch = std::mem::take(&mut self.scratch);
+        if view.clip_project(poly, &mut scratch) >= 3 {
+            self.draw_screen_polygon(&scratch, id, coverage);
+        }
+        self.scratch = scratch;
+    }
+
+    /// Draw a world triangle.
+    pub fn draw_triangle(&mut self, view: &View, tri: &[DVec3; 3], id: u32, coverage: Coverage) {
+        self.draw_polygon(view, tri, id, coverage)
+    }
+
+    /// Draw a convex screen polygon (the rasterizer's 2D entry point, for callers that
+    /// project by themselves, e.g. extended projections).
+    pub fn draw_screen_polygon(&mut self, poly: &[ScreenVertex], id: u32, coverage: Coverage) {
+        let Some(p) = Prepared::new(poly) else { return };
+        if p.off_screen(self.width, self.height) {
+            return;
+        }
+        let (w, h) = (self.width, self.height);
+        let width = self.width as usize;
+        let (depth, ids) = (&mut self.depth, &mut self.ids);
+        let mut put = |i: u32, j: u32, z: f32| {
+            let k = j as usize * width + i as usize;
+            if z < depth[k] {
+                depth[k] = z;
+                ids[k] = id;
+            }
+        };
+        match coverage {
+            Coverage::Standard => coverage::standard(&p, w, h, &mut put),
+            Coverage::Inner => coverage::inner(&p, w, h, &mut put),
+            Coverage::Outer => coverage::outer(&p, w, h, &mut put),
+        }
+    }
+
+    /// Draw the **union** of planar convex world polygons (e.g. every face of one fused
+    /// occluder) with the inner rule: a pixel is written when the union covers it
+    /// entirely, even if no single piece does (NOTES §2), with an upper bound of the
+    /// union's depth in it.
+    pub fn draw_union<'a>(
+        &mut self,
+        view: &View,
+        pieces: impl IntoIterator<Item = &'a [DVec3]>,
+        id: u32,
+    ) {
+        let mut prepared = std::mem::take(&mut self.pieces);
+        prepared.clear();
+        let mut scratch = std::mem::take(&mut self.scratch);
+        let mut push = |poly: &[DVec3], prepared: &mut Vec<Prepared>| {
+            if view.clip_project(poly, &mut scratch) >= 3 {
+                if let Some(p) = Prepared::new(&scratch) {
+                    prepared.push(p);
+                }
+            }
+        };
+        for poly in pieces {
+            if poly.len() > MAX_INPUT_VERTS {
+                for chunk in fan(poly) {
+                    push(&chunk, &mut prepared);
+                }
+            } else {
+                push(poly, &mut prepared);
+            }
+        }
+        self.scratch = scratch;
+        self.union_prepared(&prepared, id);
+        self.pieces = prepared;
+    }
+
+    /// Screen-space version of [`Framebuffer::draw_union`].
+    pub fn draw_screen_union(&mut self, pieces: &[&[ScreenVertex]], id: u32) {
+        let prepared: Vec<Prepared> = pieces.iter().filter_map(|p| Prepared::new(p)).collect();
+        self.union_prepared(&prepared, id);
+    }
+
+    fn union_prepared(&mut self, prepared: &[Prepared], id: u32) {
+        let width = self.width as usize;
+        let (w, h) = (self.width, self.height);
+        let (depth, ids) = (&mut self.depth, &mut self.ids);
+        coverage::inner_union(prepared, w, h, |i, j, z| {
+            let k = j as usize * width + i as usize;
+            if z < depth[k] {
+                depth[k] = z;
+                ids[k] = id;
+            }
+        });
+    }
+
+    /// Whether a convex world polygon, drawn with the outer rule at its nearest depth,
+    /// is hidden behind what the buffer holds in `view` (ties count as visible). Only
+    /// the part inside the view's window is judged; a polygon reaching in front of the
+    /// near plane is never occluded.
+    pub fn polygon_occluded(&self, view: &View, poly: &[DVec3]) -> bool {
+        let depth_at = |i: u32, j: u32| self.depth[j as usize * self.width as usize + i as usize];
+        occluded_test(view, poly, self.width, self.height, &depth_at, None)
+    }
+
+    /// The hierarchical max-depth pyramid of the current depth buffer.
+    pub fn pyramid(&self) -> DepthPyramid {
+        DepthPyramid::build(self)
+    }
+}
+
+/// Split a polygon with many vertices into fan pieces of at most MAX_INPUT_VERTS.
+fn fan(poly: &[DVec3]) -> Vec<Vec<DVec3>> {
+    let mut out = Vec::new();
+    let mut k = 1;
+    while k + 1 < poly.len() {
+        let end = (k + MAX_INPUT_VERTS - 1).min(poly.len());
+        let mut c = Vec::with_capacity(end - k + 1);
+        c.push(poly[0]);
+        c.extend_from_slice(&poly[k..end]);
+        if c.len() >= 3 {
+            out.push(c);
+        }
+        k = end - 1;
+    }
+    out
+}
+
+/// Shared occlusion test: outer coverage, nearest depth, strict comparison.
+pub(crate) fn occluded_test(
+    view: &View,
+    poly: &[DVec3],
+    width: u32,
+    height: u32,
+    depth_at: &dyn Fn(u32, u32) -> f32,
+    pyramid: Option<&DepthPyramid>,
+) -> bool {
+    if poly.len() > MAX_INPUT_VERTS {
+        return fan(poly)
+            .iter()
+            .all(|c| occluded_test(view, c, width, height, depth_at, pyramid));
+    }
+    if poly.iter().any(|p| view.to_camera(*p).z < view.near) {
+        return false;
+    }
+    let mut sv = Vec::with_capacity(MAX_INPUT_VERTS);
+    if view.clip_project(poly, &mut sv) < 3 {
+        return false;
+    }
+    screen_occluded(&sv, width, height, depth_at, pyramid)
+}
+
+pub(crate) fn screen_occluded(
+    sv: &[ScreenVertex],
+    width: u32,
+    height: u32,
+    depth_at: &dyn Fn(u32, u32) -> f32,
+    pyramid: Option<&DepthPyramid>,
+) -> bool {
+    let Some(p) = Prepared::new(sv) else {
+        return false;
+    };
+    if p.off_screen(width, height) {
+        return true;
+    }
+    if let Some(pyr) = pyramid {
+        let x0 = ((p.xmin - coverage::EPS_PX).floor().max(0.0)) as u32;
+        let y0 = ((p.ymin - coverage::EPS_PX).floor().max(0.0)) as u32;
+        let x1 = ((p.xmax + coverage::EPS_PX).floor() as i64).min(width as i64 - 1).max(0) as u32;
+        let y1 = ((p.ymax + coverage::EPS_PX).floor() as i64).min(height as i64 - 1).max(0) as u32;
+        if pyr.rect_occluded(x0, y0, x1, y1, p.min_depth()) {
+            return true;
+        }
+    }
+    let mut visible = false;
+    coverage::outer(&p, width, height, |i, j, z| {
+        if !visible && depth_at(i, j) >= z {
+            visible = true;
+        }
+    });
+    !visible
+}
