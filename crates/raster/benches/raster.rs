@@ -73,7 +73,12 @@ fn bench(c: &mut Criterion) {
     g.measurement_time(std::time::Duration::from_secs(3));
     g.throughput(Throughput::Elements(queries.len() as u64));
     g.bench_function("pyramid_triangle_occluded", |b| {
-        b.iter(|| queries.iter().filter(|t| pyr.triangle_occluded(&view, t)).count())
+        b.iter(|| {
+            queries
+                .iter()
+                .filter(|t| pyr.triangle_occluded(&view, t))
+                .count()
+        })
     });
     g.finish();
 

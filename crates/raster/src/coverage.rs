@@ -112,7 +112,11 @@ impl Prepared {
             if !(a.x.is_finite() && a.y.is_finite() && a.w.is_finite()) {
                 return None;
             }
-            let (lo, hi) = if (a.y, a.x) <= (b.y, b.x) { (a, b) } else { (b, a) };
+            let (lo, hi) = if (a.y, a.x) <= (b.y, b.x) {
+                (a, b)
+            } else {
+                (b, a)
+            };
             let dy = hi.y - lo.y;
             p.edges[k] = Edge {
                 px: lo.x,
@@ -133,7 +137,8 @@ impl Prepared {
         let o = v[0];
         let mut best = (0.0f64, 1usize);
         for k in 1..n - 1 {
-            let d = ((v[k].x - o.x) * (v[k + 1].y - o.y) - (v[k + 1].x - o.x) * (v[k].y - o.y)).abs();
+            let d =
+                ((v[k].x - o.x) * (v[k + 1].y - o.y) - (v[k + 1].x - o.x) * (v[k].y - o.y)).abs();
             if d > best.0 {
                 best = (d, k);
             }
@@ -247,8 +252,9 @@ impl Prepared {
     #[inline]
     fn centre_depth(&self, i: u32, j: u32) -> f32 {
         let w = match self.plane {
-            Some((a, b, c)) => (a * (i as f64 + 0.5) + b * (j as f64 + 0.5) + c)
-                .clamp(self.wmin, self.wmax),
+            Some((a, b, c)) => {
+                (a * (i as f64 + 0.5) + b * (j as f64 + 0.5) + c).clamp(self.wmin, self.wmax)
+            }
             None => self.wmax,
         };
         (1.0 / w) as f32
@@ -265,10 +271,7 @@ impl Prepared {
     /// Whether the polygon lies entirely off the screen.
     #[inline]
     pub fn off_screen(&self, width: u32, height: u32) -> bool {
-        self.xmax < 0.0
-            || self.ymax < 0.0
-            || self.xmin > width as f64
-            || self.ymin > height as f64
+        self.xmax < 0.0 || self.ymax < 0.0 || self.xmin > width as f64 || self.ymin > height as f64
     }
 }
 
@@ -400,7 +403,10 @@ pub(crate) fn inner_union(
     let mut order: Vec<usize> = (0..pieces.len()).collect();
     order.sort_by(|&a, &b| pieces[a].ymin.total_cmp(&pieces[b].ymin));
     let ymin = pieces.iter().map(|p| p.ymin).fold(f64::INFINITY, f64::min);
-    let ymax = pieces.iter().map(|p| p.ymax).fold(f64::NEG_INFINITY, f64::max);
+    let ymax = pieces
+        .iter()
+        .map(|p| p.ymax)
+        .fold(f64::NEG_INFINITY, f64::max);
     let j0 = (ymin.floor() as i64).max(0);
     let j1 = ((ymax.ceil() as i64) - 1).min(height as i64 - 1);
     let mut active: Vec<usize> = Vec::new();
@@ -432,7 +438,11 @@ pub(crate) fn inner_union(
         let mut first = true;
         for s in events.windows(2) {
             ivs.clear();
-            ivs.extend(active.iter().filter_map(|&k| pieces[k].inner_chord(s[0], s[1])));
+            ivs.extend(
+                active
+                    .iter()
+                    .filter_map(|&k| pieces[k].inner_chord(s[0], s[1])),
+            );
             merge(&mut ivs);
             if first {
                 std::mem::swap(&mut acc, &mut ivs);

@@ -243,8 +243,12 @@ pub(crate) fn screen_occluded(
     if let Some(pyr) = pyramid {
         let x0 = ((p.xmin - coverage::EPS_PX).floor().max(0.0)) as u32;
         let y0 = ((p.ymin - coverage::EPS_PX).floor().max(0.0)) as u32;
-        let x1 = ((p.xmax + coverage::EPS_PX).floor() as i64).min(width as i64 - 1).max(0) as u32;
-        let y1 = ((p.ymax + coverage::EPS_PX).floor() as i64).min(height as i64 - 1).max(0) as u32;
+        let x1 = ((p.xmax + coverage::EPS_PX).floor() as i64)
+            .min(width as i64 - 1)
+            .max(0) as u32;
+        let y1 = ((p.ymax + coverage::EPS_PX).floor() as i64)
+            .min(height as i64 - 1)
+            .max(0) as u32;
         if pyr.rect_occluded(x0, y0, x1, y1, p.min_depth()) {
             return true;
         }

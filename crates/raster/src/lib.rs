@@ -97,7 +97,10 @@ pub fn prism_faces(footprint: &Polygon, base: f64, top: f64) -> Vec<Vec<DVec3>> 
     }
     out.extend(caps.iter().map(|t| t.map(|p| p.extend(top)).to_vec()));
     if base > 0.0 && top > base {
-        out.extend(caps.iter().map(|t| vec![t[0].extend(base), t[2].extend(base), t[1].extend(base)]));
+        out.extend(
+            caps.iter()
+                .map(|t| vec![t[0].extend(base), t[2].extend(base), t[1].extend(base)]),
+        );
     }
     out
 }
@@ -105,7 +108,12 @@ pub fn prism_faces(footprint: &Polygon, base: f64, top: f64) -> Vec<Vec<DVec3>> 
 /// Render the six cube faces around `eye` in parallel (rayon): `draw` is called once per
 /// face with the face's view and an empty buffer. Returns the buffers in [`Face::ALL`]
 /// order.
-pub fn render_cube<F>(eye: DVec3, resolution_px: u32, near: f64, draw: F) -> Vec<(View, Framebuffer)>
+pub fn render_cube<F>(
+    eye: DVec3,
+    resolution_px: u32,
+    near: f64,
+    draw: F,
+) -> Vec<(View, Framebuffer)>
 where
     F: Fn(&View, &mut Framebuffer) + Sync,
 {

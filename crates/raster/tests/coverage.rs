@@ -11,7 +11,12 @@ const H: u32 = 16;
 /// Clip a polygon (x, y, w) to the pixel square (Sutherland–Hodgman).
 fn clip_to_pixel(poly: &[ScreenVertex], i: u32, j: u32) -> Vec<ScreenVertex> {
     let (x0, y0, x1, y1) = (i as f64, j as f64, i as f64 + 1.0, j as f64 + 1.0);
-    let planes: [(f64, f64, f64); 4] = [(1.0, 0.0, -x0), (-1.0, 0.0, x1), (0.0, 1.0, -y0), (0.0, -1.0, y1)];
+    let planes: [(f64, f64, f64); 4] = [
+        (1.0, 0.0, -x0),
+        (-1.0, 0.0, x1),
+        (0.0, 1.0, -y0),
+        (0.0, -1.0, y1),
+    ];
     let mut cur = poly.to_vec();
     for (a, b, c) in planes {
         let f = |v: &ScreenVertex| a * v.x + b * v.y + c;
@@ -68,7 +73,9 @@ fn point_inside_margin(poly: &[ScreenVertex], x: f64, y: f64) -> f64 {
     let mut m = f64::INFINITY;
     for k in 0..n {
         let (p, q) = (poly[k], poly[(k + 1) % n]);
-        let len = ((q.x - p.x).powi(2) + (q.y - p.y).powi(2)).sqrt().max(1e-300);
+        let len = ((q.x - p.x).powi(2) + (q.y - p.y).powi(2))
+            .sqrt()
+            .max(1e-300);
         let e = ((q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x)) / len * orient;
         m = m.min(e);
     }
@@ -87,17 +94,30 @@ fn vertex() -> impl Strategy<Value = ScreenVertex> {
 
 /// Snap some coordinates to the pixel grid to exercise exact-boundary cases.
 fn vertex_snapped() -> impl Strategy<Value = ScreenVertex> {
-    (-3i32..19, -3i32..19, 0.05f64..1.0, any::<bool>(), 0.0f64..1.0).prop_map(|(x, y, w, snap, f)| {
-        let off = if snap { 0.0 } else { f };
-        ScreenVertex { x: x as f64 + off, y: y as f64, w }
-    })
+    (
+        -3i32..19,
+        -3i32..19,
+        0.05f64..1.0,
+        any::<bool>(),
+        0.0f64..1.0,
+    )
+        .prop_map(|(x, y, w, snap, f)| {
+            let off = if snap { 0.0 } else { f };
+            ScreenVertex {
+                x: x as f64 + off,
+                y: y as f64,
+                w,
+            }
+        })
 }
 
 /// Exact depth range of the polygon within the pixel (w is affine: extremes at the
 /// vertices of the clipped polygon).
 fn depth_range(clipped: &[ScreenVertex]) -> (f64, f64) {
     let zs = clipped.iter().map(|v| 1.0 / v.w);
-    zs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), z| (a.min(z), b.max(z)))
+    zs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), z| {
+        (a.min(z), b.max(z))
+    })
 }
 
 fn check_polygon(poly: &[ScreenVertex]) -> Result<(), TestCaseError> {
@@ -116,7 +136,8 @@ fn check_polygon(poly: &[ScreenVertex]) -> Result<(), TestCaseError> {
                 let (_, zmax) = depth_range(&clipped);
                 prop_assert!(
                     inner.depth_at(i, j) as f64 >= zmax * (1.0 - 1e-9),
-                    "inner depth {} < farthest {zmax}", inner.depth_at(i, j)
+                    "inner depth {} < farthest {zmax}",
+                    inner.depth_at(i, j)
                 );
                 prop_assert!(is_std, "inner pixel ({i},{j}) not standard");
             }
@@ -125,7 +146,8 @@ fn check_polygon(poly: &[ScreenVertex]) -> Result<(), TestCaseError> {
                 let (zmin, _) = depth_range(&clipped);
                 prop_assert!(
                     outer.depth_at(i, j) as f64 <= zmin * (1.0 + 1e-9),
-                    "outer depth {} > nearest {zmin}", outer.depth_at(i, j)
+                    "outer depth {} > nearest {zmin}",
+                    outer.depth_at(i, j)
                 );
             }
             if is_std {
@@ -155,14 +177,16 @@ fn hull(mut pts: Vec<ScreenVertex>) -> Vec<ScreenVertex> {
     };
     let mut lower: Vec<ScreenVertex> = Vec::new();
     for p in &pts {
-        while lower.len() >= 2 && cross(&lower[lower.len() - 2], &lower[lower.len() - 1], p) <= 0.0 {
+        while lower.len() >= 2 && cross(&lower[lower.len() - 2], &lower[lower.len() - 1], p) <= 0.0
+        {
             lower.pop();
         }
         lower.push(*p);
     }
     let mut upper: Vec<ScreenVertex> = Vec::new();
     for p in pts.iter().rev() {
-        while upper.len() >= 2 && cross(&upper[upper.len() - 2], &upper[upper.len() - 1], p) <= 0.0 {
+        while upper.len() >= 2 && cross(&upper[upper.len() - 2], &upper[upper.len() - 1], p) <= 0.0
+        {
             upper.pop();
         }
         upper.push(*p);
@@ -252,10 +276,26 @@ proptest! {
 fn union_of_quads_sharing_an_edge_has_no_crack() {
     let q = |x0: f64, x1: f64| {
         vec![
-            ScreenVertex { x: x0, y: 2.3, w: 0.5 },
-            ScreenVertex { x: x1, y: 2.3, w: 0.5 },
-            ScreenVertex { x: x1, y: 12.6, w: 0.5 },
-            ScreenVertex { x: x0, y: 12.6, w: 0.5 },
+            ScreenVertex {
+                x: x0,
+                y: 2.3,
+                w: 0.5,
+            },
+            ScreenVertex {
+                x: x1,
+                y: 2.3,
+                w: 0.5,
+            },
+            ScreenVertex {
+                x: x1,
+                y: 12.6,
+                w: 0.5,
+            },
+            ScreenVertex {
+                x: x0,
+                y: 12.6,
+                w: 0.5,
+            },
         ]
     };
     let (a, b, whole) = (q(1.2, 7.5), q(7.5, 13.9), q(1.2, 13.9));
@@ -277,10 +317,26 @@ fn union_of_quads_sharing_an_edge_has_no_crack() {
 fn union_of_stacked_quads_has_no_crack() {
     let q = |y0: f64, y1: f64| {
         vec![
-            ScreenVertex { x: 2.0, y: y0, w: 0.5 },
-            ScreenVertex { x: 10.0, y: y0, w: 0.5 },
-            ScreenVertex { x: 10.0, y: y1, w: 0.5 },
-            ScreenVertex { x: 2.0, y: y1, w: 0.5 },
+            ScreenVertex {
+                x: 2.0,
+                y: y0,
+                w: 0.5,
+            },
+            ScreenVertex {
+                x: 10.0,
+                y: y0,
+                w: 0.5,
+            },
+            ScreenVertex {
+                x: 10.0,
+                y: y1,
+                w: 0.5,
+            },
+            ScreenVertex {
+                x: 2.0,
+                y: y1,
+                w: 0.5,
+            },
         ]
     };
     let mut union = Framebuffer::new(W, H);
