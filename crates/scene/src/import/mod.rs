@@ -1,4 +1,15 @@
-//! Importers (SPEC §1 "Input formats"): the format is chosen by file extension.
+//! Importers (SPEC §1 "Input formats"). The format is chosen by file extension; a
+//! `.json` file is GeoJSON or CityJSON according to its `"type"`.
+//!
+//! Every importer validates and repairs its input ([`validate`]): each repair is a
+//! counted [`crate::Warning`] in [`Scene::warnings`], and what cannot be repaired is an
+//! [`ImportError`] naming the feature and the problem. Nothing panics on bad input.
+//! See `docs/import.md` for the formats, conventions and warning kinds.
+
+pub mod geojson;
+pub mod height;
+pub mod project;
+pub mod validate;
 
 use crate::Scene;
 use std::path::Path;
@@ -37,8 +48,27 @@ pub enum ImportError {
     Unsupported(String),
 }
 
+fn read(path: &Path) -> Result<Vec<u8>, ImportError> {
+    std::fs::read(path).map_err(|source| ImportError::Io {
+        path: path.display().to_string(),
+        source,
+    })
+}
+
 /// Load a scene from a file, choosing the importer by extension.
 pub fn load(path: &Path, opts: &ImportOptions) -> Result<Scene, ImportError> {
-    let _ = opts;
-    Err(ImportError::Unsupported(path.display().to_string()))
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let ext = name.rsplit('.').next().unwrap_or("");
+    match ext {
+        "geojson" => geojson::parse(&read(path)?, opts),
+        "json" => {
+            let root: serde_json::Value = serde_json::from_slice(&read(path)?)
+                .map_err(|e| ImportError::Format(format!("invalid JSON: {e}")))?;
+            geojson::from_value(&root, opts)
+        }
+        _ => Err(ImportError::Unsupported(path.display().to_string())),
+    }
 }
