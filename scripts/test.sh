@@ -5,3 +5,17 @@ cd "$(dirname "$0")/.."
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets -- -D warnings
 cargo test --workspace
+
+# Browser end-to-end test of the walkthrough viewer (crates/server/e2e): Debian's chromium
+# driven by npm playwright-core. Installs are skipped when already present.
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+if ! command -v chromium >/dev/null 2>&1; then
+  $SUDO apt-get install -y chromium || { $SUDO apt-get update && $SUDO apt-get install -y chromium; }
+fi
+if [ ! -f crates/server/e2e/node_modules/.package-lock.json ] \
+  || [ crates/server/e2e/package-lock.json -nt crates/server/e2e/node_modules/.package-lock.json ]; then
+  (cd crates/server/e2e && npm ci --no-audit --no-fund)
+fi
+cargo build -p sightline
+node crates/server/e2e/walk.test.mjs

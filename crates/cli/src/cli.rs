@@ -215,6 +215,12 @@ pub enum Command {
         /// Require this token (`?token=` or `Authorization: Bearer`).
         #[arg(long)]
         token: Option<String>,
+        /// Resolution of the on-line method (its default if not given).
+        #[arg(long)]
+        resolution: Option<u32>,
+        /// Worker threads computing PVS on-line (default: one per core).
+        #[arg(long)]
+        workers: Option<usize>,
     },
 }
 

@@ -1,2 +1,214 @@
 //! Walkthrough server of sightline (SPEC §9): HTTP API, WebSocket walk sessions with
 //! PVS prefetch, and the embedded browser viewer.
+//!
+//! This is the remote-walkthrough scenario of the dual ray space paper (Koltun et al.
+//! 2001, §1 and §6, Fig. 5): a large city lives on the server; a thin client walks
+//! through it; the server keeps the client supplied with the PVS of the viewcell it is in
+//! and of the cells it may enter next — ahead of time, so that the client never waits —
+//! and sends the geometry of each object the first time it becomes potentially visible.
+//!
+//! * [`grid`] — the regular grid of viewcells;
+//! * [`source`] — where a cell's PVS comes from (a method on-line, or a `.pvs` file);
+//! * [`cache`] — LRU cache and bounded worker pool in front of the source;
+//! * [`geometry`] — the compact binary object geometry (`SLG1`);
+//! * [`api`] — HTTP endpoints; [`walk`] — WebSocket sessions; [`limits`] — token and rate
+//!   limits; [`web`] — the embedded viewer.
+//!
+//! ```no_run
+//! # async fn demo() -> std::io::Result<()> {
+//! use std::sync::Arc;
+//! use sightline_server::{Server, ServerConfig, grid::CellGrid, source::OnlineSource};
+//! use sightline_scene::Scene;
+//! let scene = Arc::new(Scene::from_objects(vec![]));
+//! let grid = CellGrid::cover(&scene.bounds, 100.0).unwrap();
+//! let method = sightline_methods::create("erosion", scene.clone(), &Default::default()).unwrap();
+//! let server = Server::new(scene, Arc::new(OnlineSource::new(method, grid)), ServerConfig::default());
+//! let listener = tokio::net::TcpListener::bind("127.0.0.1:8080").await?;
+//! server.run(listener, async { let _ = tokio::signal::ctrl_c().await; }).await
+//! # }
+//! ```
+
+pub mod api;
+pub mod cache;
+pub mod geometry;
+pub mod grid;
+pub mod limits;
+pub mod source;
+pub mod walk;
+pub mod web;
+
+use cache::{CacheConfig, PvsCache};
+use geometry::GeometryStore;
+use sightline_geom::DVec3;
+use sightline_scene::Scene;
+use source::SharedSource;
+use std::future::Future;
+use std::net::SocketAddr;
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::Arc;
+use tokio::sync::watch;
+
+/// Limits and options of a server.
+#[derive(Clone, Debug)]
+pub struct ServerConfig {
+    /// When set, every `/api` request must carry it (`?token=` or `Authorization: Bearer`).
+    pub token: Option<String>,
+    /// Cache and worker pool sizes.
+    pub cache: CacheConfig,
+    /// Most simultaneous walk sessions.
+    pub max_sessions: usize,
+    /// HTTP requests per second and burst allowed per client address.
+    pub http_rate_per_s: f64,
+    pub http_burst: f64,
+    /// WebSocket messages per second and burst allowed per session.
+    pub ws_rate_per_s: f64,
+    pub ws_burst: f64,
+    /// Largest WebSocket message a client may send (bytes).
+    pub ws_max_message_bytes: usize,
+    /// Most ids in one `/api/objects` request.
+    pub max_ids_per_request: usize,
+    /// Most cell PVS a session keeps on the client (older ones are forgotten).
+    pub max_held_cells: usize,
+    /// Malformed messages tolerated before a session is closed.
+    pub max_session_errors: u32,
+}
+
+impl Default for ServerConfig {
+    fn default() -> Self {
+        ServerConfig {
+            token: None,
+            cache: CacheConfig::default(),
+            max_sessions: 1024,
+            http_rate_per_s: 100.0,
+            http_burst: 400.0,
+            ws_rate_per_s: 30.0,
+            ws_burst: 60.0,
+            ws_max_message_bytes: 4096,
+            max_ids_per_request: 8192,
+            max_held_cells: 32,
+            max_session_errors: 64,
+        }
+    }
+}
+
+/// Counters of the whole server.
+#[derive(Default)]
+pub struct Counters {
+    pub sessions: AtomicUsize,
+    pub sessions_total: AtomicU64,
+    pub ws_messages: AtomicU64,
+    pub ws_errors: AtomicU64,
+    pub cell_changes: AtomicU64,
+    pub prefetch_hits: AtomicU64,
+    pub bytes_sent: AtomicU64,
+    pub http_limited: AtomicU64,
+}
+
+/// Everything the handlers share.
+pub struct AppState {
+    pub scene: Arc<Scene>,
+    pub cache: Arc<PvsCache>,
+    pub geometry: GeometryStore,
+    /// Coordinates sent to clients are relative to this point (see [`geometry`]).
+    pub origin: DVec3,
+    pub config: ServerConfig,
+    pub counters: Counters,
+    pub limiter: limits::RateLimiter,
+    pub boxes: axum::body::Bytes,
+    shutdown: watch::Receiver<bool>,
+}
+
+impl AppState {
+    pub fn source(&self) -> &SharedSource {
+        self.cache.source()
+    }
+
+    /// Resolves when the server starts shutting down.
+    pub fn shutdown_signal(&self) -> watch::Receiver<bool> {
+        self.shutdown.clone()
+    }
+
+    pub fn counter(c: &AtomicU64) -> u64 {
+        c.load(Ordering::Relaxed)
+    }
+}
+
+/// A walkthrough server for one scene and one PVS source.
+pub struct Server {
+    state: Arc<AppState>,
+    shutdown_tx: watch::Sender<bool>,
+}
+
+impl Server {
+    pub fn new(scene: Arc<Scene>, source: SharedSource, config: ServerConfig) -> Self {
+        let g = source.grid();
+        let origin = DVec3::new(g.origin[0], g.origin[1], 0.0);
+        let geometry = GeometryStore::new(scene.clone(), origin);
+        let boxes = axum::body::Bytes::from(geometry.boxes());
+        let cache = PvsCache::new(source, config.cache.clone());
+        let (shutdown_tx, shutdown) = watch::channel(false);
+        let limiter = limits::RateLimiter::new(config.http_rate_per_s, config.http_burst);
+        Server {
+            state: Arc::new(AppState {
+                scene,
+                cache,
+                geometry,
+                origin,
+                config,
+                counters: Counters::default(),
+                limiter,
+                boxes,
+                shutdown,
+            }),
+            shutdown_tx,
+        }
+    }
+
+    pub fn state(&self) -> &Arc<AppState> {
+        &self.state
+    }
+
+    /// The HTTP routes (viewer, API, walk sessions).
+    pub fn router(&self) -> axum::Router {
+        api::router(self.state.clone())
+    }
+
+    /// Serve on `listener` until `shutdown` resolves, then close every walk session with a
+    /// close frame, let running requests finish and stop the worker pool.
+    pub async fn run(
+        self,
+        listener: tokio::net::TcpListener,
+        shutdown: impl Future<Output = ()> + Send + 'static,
+    ) -> std::io::Result<()> {
+        let app = self
+            .router()
+            .into_make_service_with_connect_info::<SocketAddr>();
+        let tx = self.shutdown_tx;
+        let result = axum::serve(listener, app)
+            .with_graceful_shutdown(async move {
+                shutdown.await;
+                let _ = tx.send(true);
+            })
+            .await;
+        let cache = self.state.cache.clone();
+        let _ = tokio::task::spawn_blocking(move || cache.shutdown()).await;
+        result
+    }
+}
+
+/// Resident and peak memory of this process in KiB (`VmRSS`, `VmHWM` of
+/// `/proc/self/status`; zeros where unavailable). Read by `/api/stats` only: the path is
+/// fixed, never taken from a request.
+pub fn memory_kib() -> (u64, u64) {
+    let Ok(s) = std::fs::read_to_string("/proc/self/status") else {
+        return (0, 0);
+    };
+    let field = |name: &str| {
+        s.lines()
+            .find_map(|l| l.strip_prefix(name))
+            .and_then(|r| r.split_whitespace().next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or(0)
+    };
+    (field("VmRSS:"), field("VmHWM:"))
+}

@@ -1,8 +1,126 @@
-//! `sightline serve`.
+//! `sightline serve`: the walkthrough server (SPEC §9) on a scene, answering from a
+//! `.pvs` file or computing PVS on-line with `--method` (dual ray space paper, §6).
 
 use crate::cli::Command;
+use crate::common::load_scene;
+use anyhow::{bail, Context};
+use sightline_methods::MethodOptions;
+use sightline_server::cache::CacheConfig;
+use sightline_server::grid::CellGrid;
+use sightline_server::source::{OnlineSource, SharedSource};
+use sightline_server::{Server, ServerConfig};
+use std::io::Write;
+use std::sync::Arc;
 
-pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
-    let _ = (cmd, quiet);
-    anyhow::bail!("`sightline serve` is not implemented yet")
+pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
+    let Command::Serve {
+        scene: scene_arg,
+        pvs,
+        addr,
+        cell_size,
+        method,
+        token,
+        resolution,
+        workers,
+    } = cmd
+    else {
+        unreachable!("dispatched by commands::run")
+    };
+    if let Some(t) = &token {
+        if t.is_empty() {
+            bail!("--token must not be empty");
+        }
+    }
+    if workers == Some(0) {
+        bail!("--workers must be at least 1");
+    }
+    let scene = Arc::new(load_scene(&scene_arg)?);
+    if scene.is_empty() {
+        bail!("{}: the scene has no objects", scene_arg.scene.display());
+    }
+    let source: SharedSource = match pvs {
+        Some(path) => bail!(
+            "{}: serving from a .pvs file is not available in this build yet; serve on-line with --method instead",
+            path.display()
+        ),
+        None => {
+            let grid = CellGrid::cover(&scene.bounds, cell_size).context("--cell-size")?;
+            eprintln!(
+                "preparing method '{method}' for {} objects ({} cells of {cell_size} m)…",
+                scene.len(),
+                grid.len()
+            );
+            let opts = MethodOptions {
+                resolution_px: resolution,
+                ..Default::default()
+            };
+            let m = sightline_methods::create(&method, scene.clone(), &opts)
+                .with_context(|| format!("cannot prepare method '{method}'"))?;
+            if method == "all" {
+                eprintln!("note: method 'all' does no culling: every PVS is the whole scene");
+            } else if !m.is_conservative() {
+                eprintln!(
+                    "warning: method '{method}' is NOT conservative: clients may miss visible objects"
+                );
+            }
+            Arc::new(OnlineSource::new(m, grid))
+        }
+    };
+    let mut config = ServerConfig {
+        token,
+        ..Default::default()
+    };
+    if let Some(w) = workers {
+        config.cache = CacheConfig {
+            workers: w,
+            ..config.cache
+        };
+    }
+    let info = source.info();
+    let cells = source.grid().len();
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+        .context("cannot start the async runtime")?;
+    rt.block_on(async move {
+        let listener = tokio::net::TcpListener::bind(&addr)
+            .await
+            .with_context(|| format!("cannot listen on {addr}"))?;
+        let local = listener.local_addr()?;
+        let server = Server::new(scene.clone(), source, config);
+        // The e2e test reads this line to find the port of `--addr 127.0.0.1:0`.
+        println!(
+            "sightline: serving {} objects, {cells} cells, method {} ({}{}) on http://{local}/",
+            scene.len(),
+            info.method,
+            info.kind,
+            if info.conservative { ", conservative" } else { ", NOT conservative" },
+        );
+        std::io::stdout().flush().ok();
+        server.run(listener, shutdown_signal()).await?;
+        eprintln!("sightline: shut down");
+        Ok(())
+    })
+}
+
+/// Ctrl-C or SIGTERM.
+async fn shutdown_signal() {
+    let ctrl_c = async {
+        let _ = tokio::signal::ctrl_c().await;
+    };
+    #[cfg(unix)]
+    let term = async {
+        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
+            Ok(mut s) => {
+                s.recv().await;
+            }
+            Err(_) => std::future::pending::<()>().await,
+        }
+    };
+    #[cfg(not(unix))]
+    let term = std::future::pending::<()>();
+    tokio::select! {
+        _ = ctrl_c => {},
+        _ = term => {},
+    }
 }

@@ -1,0 +1,168 @@
+// End-to-end test of the walkthrough viewer in real headless Chromium (Debian `chromium`,
+// driven by playwright-core). It starts `sightline serve`, opens the viewer, walks a
+// scripted path across several viewcells and checks at every step that the objects the
+// page draws are exactly the server's PVS for that cell (`/api/pvs`), so no potentially
+// visible object is missing and no hidden one is drawn. Screenshots go to e2e/out/.
+//
+// Environment:
+//   SIGHTLINE_BIN   the binary (default: <repo>/target/debug/sightline)
+//   E2E_SCENE       scene file (default: <repo>/data/lyon1_bdtopo.geojson)
+//   E2E_METHOD      on-line method (default: erosion)
+//   E2E_CELL_SIZE   viewcell size in metres (default: 100)
+//   CHROMIUM        browser executable (default: /usr/bin/chromium)
+import { spawn } from 'node:child_process';
+import { mkdirSync } from 'node:fs';
+import { dirname, join, resolve } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import assert from 'node:assert/strict';
+import { chromium } from 'playwright-core';
+
+const here = dirname(fileURLToPath(import.meta.url));
+const repo = resolve(here, '../../..');
+const bin = process.env.SIGHTLINE_BIN || join(repo, 'target/debug/sightline');
+const sceneFile = process.env.E2E_SCENE || join(repo, 'data/lyon1_bdtopo.geojson');
+const method = process.env.E2E_METHOD || 'erosion';
+const cellSize = Number(process.env.E2E_CELL_SIZE || 100);
+const outDir = join(here, 'out');
+mkdirSync(outDir, { recursive: true });
+
+function log(...a) { console.log('[e2e]', ...a); }
+
+function startServer() {
+  const args = ['serve', sceneFile, '--method', method, '--cell-size', String(cellSize), '--addr', '127.0.0.1:0'];
+  log(bin, args.join(' '));
+  const proc = spawn(bin, args, { stdio: ['ignore', 'pipe', 'pipe'] });
+  let stderr = '';
+  proc.stderr.on('data', (d) => { stderr += d; process.stderr.write(d); });
+  const url = new Promise((res, rej) => {
+    let out = '';
+    proc.stdout.on('data', (d) => {
+      out += d;
+      const m = out.match(/on (http:\/\/[^\s]+\/)/);
+      if (m) res(m[1]);
+    });
+    proc.on('exit', (code) => rej(new Error(`server exited (${code}) before listening: ${stderr.trim()}`)));
+    setTimeout(() => rej(new Error('server did not start within 600 s')), 600_000);
+  });
+  return { proc, url };
+}
+
+async function getJson(base, path) {
+  const r = await fetch(base + path);
+  const body = await r.json();
+  assert.ok(r.ok, `${path}: HTTP ${r.status} ${JSON.stringify(body)}`);
+  return body;
+}
+
+async function main() {
+  const { proc, url } = startServer();
+  let browser;
+  let failed = false;
+  try {
+    const base = (await url).replace(/\/$/, '');
+    log('server at', base);
+    const scene = await getJson(base, '/api/scene');
+    log(`scene: ${scene.objects} objects, ${scene.cells} cells (${scene.grid.nx}×${scene.grid.ny} of ${scene.grid.cell_size_m} m), method ${scene.method}`);
+    assert.equal(scene.method, method);
+
+    browser = await chromium.launch({
+      executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+      headless: true,
+      args: [
+        '--no-sandbox', '--no-first-run', '--disable-background-networking', '--disable-component-update',
+        '--disable-sync', '--disable-quic', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+        '--ignore-gpu-blocklist',
+      ],
+    });
+    const page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
+    const pageErrors = [];
+    page.on('pageerror', (e) => pageErrors.push(String(e)));
+    page.on('console', (m) => { if (m.type() === 'error') pageErrors.push(m.text()); });
+    await page.goto(base + '/');
+    await page.evaluate(() => window.sightline.ready);
+    log('viewer ready');
+
+    // A scripted path: along the middle row of cells, west to east, over up to 5 cells,
+    // in 12 m steps (a walker's position updates), then one step north into the next row.
+    const g = scene.grid;
+    const row = Math.floor(g.ny / 2);
+    const y = g.origin[1] + (row + 0.5) * g.cell_size_m;
+    const cols = Math.min(g.nx, 5);
+    const x0 = g.origin[0] + 0.3 * g.cell_size_m;
+    const x1 = g.origin[0] + (cols - 0.3) * g.cell_size_m;
+    const path = [];
+    for (let x = x0; x <= x1; x += 12) path.push([x, y]);
+    if (row + 1 < g.ny) path.push([x1, y + g.cell_size_m]);
+
+    const cells = new Set();
+    let step = 0;
+    for (const [x, yy] of path) {
+      const r = await page.evaluate(([px, py]) => window.sightline.walkTo(px, py), [x, yy]);
+      const truth = await getJson(base, `/api/pvs?at=${x},${yy},1.7`);
+      // What the page draws is exactly the server's PVS of the cell it stands in.
+      assert.deepEqual(r.drawn, truth.visible, `step ${step} at (${x.toFixed(1)}, ${yy.toFixed(1)}): drawn != PVS`);
+      const missing = truth.visible.filter((id) => !r.drawn.includes(id));
+      assert.equal(missing.length, 0, `missing objects ${missing.slice(0, 10)}`);
+      if (!cells.has(r.cell)) {
+        cells.add(r.cell);
+        await page.evaluate(([px]) => window.sightline.look(px), [step % 2 ? 60 : 0]);
+        await page.evaluate(() => window.sightline.render());
+        await page.screenshot({ path: join(outDir, `cell-${String(cells.size).padStart(2, '0')}-${r.cell}.png`) });
+        log(`cell ${r.cell}: ${r.drawn.length} objects drawn = PVS (of ${scene.objects})`);
+      }
+      step++;
+    }
+    assert.ok(cells.size >= Math.min(3, g.nx), `walked across ${cells.size} cells only`);
+
+    // Hidden objects in red: none of them is drawn as a PVS object.
+    await page.evaluate(() => window.sightline.setShowHidden(true));
+    const hidden = await page.evaluate(() => window.sightline.hiddenIds());
+    const drawn = await page.evaluate(() => window.sightline.drawnIds());
+    assert.ok(hidden.every((id) => !drawn.includes(id)), 'a hidden object is also drawn');
+    await page.evaluate(() => window.sightline.look(30, -8));
+    await page.evaluate(() => window.sightline.render());
+    await page.screenshot({ path: join(outDir, 'hidden-red.png') });
+    log(`hidden view: ${hidden.length} hidden objects near the viewer in red`);
+    await page.evaluate(() => window.sightline.setShowHidden(false));
+
+    // The keyboard walks: hold W (with Shift: 14 m/s) for a second.
+    const before = await page.evaluate(() => window.sightline.position());
+    await page.keyboard.down('Shift');
+    await page.keyboard.down('KeyW');
+    await page.waitForTimeout(1000);
+    await page.keyboard.up('KeyW');
+    await page.keyboard.up('Shift');
+    const after = await page.evaluate(() => window.sightline.position());
+    const moved = Math.hypot(after[0] - before[0], after[1] - before[1]);
+    assert.ok(moved > 2, `W did not move the viewer (moved ${moved} m)`);
+    const r = await page.evaluate(([px, py]) => window.sightline.walkTo(px, py), [after[0], after[1]]);
+    const truth = await getJson(base, `/api/pvs?at=${after[0]},${after[1]},1.7`);
+    assert.deepEqual(r.drawn, truth.visible, 'after walking with the keyboard');
+
+    const stats = await page.evaluate(() => window.sightline.stats());
+    log('viewer stats', JSON.stringify(stats));
+    assert.equal(stats.errors, 0, `viewer errors: ${stats.lastError}`);
+    assert.deepEqual(pageErrors, [], 'page errors');
+    await page.screenshot({ path: join(outDir, 'final.png') });
+    log(`OK: ${path.length} steps over ${cells.size} cells, drawn == PVS at every step; ${stats.cellChanges} cell changes, ${stats.prefetchHits} prefetched; screenshots in ${outDir}`);
+  } catch (e) {
+    failed = true;
+    console.error('[e2e] FAILED:', e && e.stack ? e.stack : e);
+  } finally {
+    if (browser) await browser.close();
+    // Graceful shutdown on SIGTERM: the server must exit 0.
+    const code = await new Promise((res) => {
+      if (proc.exitCode !== null) return res(proc.exitCode);
+      proc.on('exit', (c) => res(c));
+      proc.kill('SIGTERM');
+      setTimeout(() => { proc.kill('SIGKILL'); res('killed'); }, 20_000);
+    });
+    if (code !== 0) {
+      console.error(`[e2e] FAILED: server exit status ${code} after SIGTERM`);
+      failed = true;
+    }
+  }
+  process.exit(failed ? 1 : 0);
+}
+
+main();

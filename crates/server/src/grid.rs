@@ -1,0 +1,257 @@
+//! The regular grid of viewcells the on-line source answers for.
+//!
+//! The dual ray space paper's walkthrough (Koltun et al. 2001, §6) partitions the ground
+//! into square viewcells of 100 × 100 m, 2 m high, and keeps the client supplied with the
+//! PVS of the cell it stands in and of the adjacent ones. [`CellGrid`] is that partition:
+//! square cells of `cell_size_m` covering the scene's bounding rectangle, at eye height
+//! `z_range_m` (default 1.5–2.0 m, as `sightline cells`). A cell's id is `iy * nx + ix`.
+
+use serde::Serialize;
+use sightline_geom::{Aabb3, DVec2, DVec3, ViewCell};
+
+/// Eye-height range of the walking viewcells (SPEC §2 default).
+pub const EYE_Z_M: (f64, f64) = (1.5, 2.0);
+
+/// A cell id on a grid (or an index into a `.pvs` file's cells).
+pub type CellId = u32;
+
+/// Most cells a grid may have: ids are `u32` and sessions keep per-cell state.
+pub const MAX_CELLS: u64 = 1 << 26;
+
+/// Square viewcells of `cell_size_m` covering `[origin, origin + (nx, ny) * size]`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CellGrid {
+    /// South-west corner of cell 0 (the scene's minimum x, y).
+    pub origin: [f64; 2],
+    pub cell_size_m: f64,
+    pub nx: u32,
+    pub ny: u32,
+    /// Eye-height range of every cell.
+    pub z_range_m: [f64; 2],
+    /// Highest z a query point may have (scene top, at least the eye height).
+    pub top_m: f64,
+}
+
+/// Why a grid cannot be made.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum GridError {
+    #[error("cell size must be a positive finite number of metres, got {0}")]
+    BadSize(f64),
+    #[error("the scene is empty: nothing to cover with cells")]
+    EmptyScene,
+    #[error("{0} cells of {1} m would be needed (at most {MAX_CELLS}): use a larger --cell-size")]
+    TooMany(u64, f64),
+}
+
+/// Why a point has no cell.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum PointError {
+    #[error("coordinates must be finite numbers")]
+    NotFinite,
+    #[error("point ({0}, {1}, {2}) is outside the scene (x {3}..{4}, y {5}..{6}, z 0..{7})")]
+    Outside(f64, f64, f64, f64, f64, f64, f64, f64),
+}
+
+impl CellGrid {
+    /// Cover `bounds` (a scene's bounding box) with cells of `cell_size_m`.
+    pub fn cover(bounds: &Aabb3, cell_size_m: f64) -> Result<Self, GridError> {
+        if !(cell_size_m.is_finite() && cell_size_m > 0.0) {
+            return Err(GridError::BadSize(cell_size_m));
+        }
+        if bounds.is_empty() {
+            return Err(GridError::EmptyScene);
+        }
+        let size = bounds.size();
+        let nx = (size.x / cell_size_m).ceil().max(1.0);
+        let ny = (size.y / cell_size_m).ceil().max(1.0);
+        let total = nx * ny;
+        if !(total <= MAX_CELLS as f64) {
+            return Err(GridError::TooMany(total as u64, cell_size_m));
+        }
+        Ok(CellGrid {
+            origin: [bounds.min.x, bounds.min.y],
+            cell_size_m,
+            nx: nx as u32,
+            ny: ny as u32,
+            z_range_m: [EYE_Z_M.0, EYE_Z_M.1],
+            top_m: bounds.max.z.max(EYE_Z_M.1),
+        })
+    }
+
+    pub fn len(&self) -> usize {
+        self.nx as usize * self.ny as usize
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The far corner of the grid.
+    pub fn max(&self) -> DVec2 {
+        DVec2::new(
+            self.origin[0] + self.nx as f64 * self.cell_size_m,
+            self.origin[1] + self.ny as f64 * self.cell_size_m,
+        )
+    }
+
+    /// The cell whose column contains `p` (cells are closed at their low side, and the
+    /// last row/column also at its high side).
+    pub fn locate(&self, p: DVec3) -> Result<CellId, PointError> {
+        if !p.is_finite() {
+            return Err(PointError::NotFinite);
+        }
+        let max = self.max();
+        let inside = p.x >= self.origin[0]
+            && p.x <= max.x
+            && p.y >= self.origin[1]
+            && p.y <= max.y
+            && p.z >= 0.0
+            && p.z <= self.top_m;
+        if !inside {
+            return Err(PointError::Outside(
+                p.x,
+                p.y,
+                p.z,
+                self.origin[0],
+                max.x,
+                self.origin[1],
+                max.y,
+                self.top_m,
+            ));
+        }
+        let ix = (((p.x - self.origin[0]) / self.cell_size_m).floor() as u32).min(self.nx - 1);
+        let iy = (((p.y - self.origin[1]) / self.cell_size_m).floor() as u32).min(self.ny - 1);
+        Ok(iy * self.nx + ix)
+    }
+
+    /// Grid coordinates of a cell.
+    pub fn coords(&self, id: CellId) -> Option<(u32, u32)> {
+        (id < self.len() as u32).then(|| (id % self.nx, id / self.nx))
+    }
+
+    /// The box of a cell.
+    pub fn cell(&self, id: CellId) -> Option<ViewCell> {
+        let (ix, iy) = self.coords(id)?;
+        let s = self.cell_size_m;
+        let x0 = self.origin[0] + ix as f64 * s;
+        let y0 = self.origin[1] + iy as f64 * s;
+        ViewCell::from_array([
+            x0,
+            y0,
+            self.z_range_m[0],
+            x0 + s,
+            y0 + s,
+            self.z_range_m[1],
+        ])
+        .ok()
+    }
+
+    /// The (up to) 8 cells adjacent to `id`, ordered so that those lying ahead along
+    /// `heading` come first (dual ray space paper, Fig. 5: the client will next enter one
+    /// of the cells in front of it). A zero heading keeps the ring order.
+    pub fn neighbours(&self, id: CellId, heading: DVec2) -> Vec<CellId> {
+        let Some((ix, iy)) = self.coords(id) else {
+            return vec![];
+        };
+        let h = heading.normalize_or_zero();
+        let mut out: Vec<(f64, CellId)> = Vec::with_capacity(8);
+        for dy in -1i64..=1 {
+            for dx in -1i64..=1 {
+                if dx == 0 && dy == 0 {
+                    continue;
+                }
+                let (jx, jy) = (ix as i64 + dx, iy as i64 + dy);
+                if jx < 0 || jy < 0 || jx >= self.nx as i64 || jy >= self.ny as i64 {
+                    continue;
+                }
+                let along = DVec2::new(dx as f64, dy as f64).normalize().dot(h);
+                out.push((along, (jy as u32) * self.nx + jx as u32));
+            }
+        }
+        // Stable: equal scores keep the ring order.
+        out.sort_by(|a, b| b.0.total_cmp(&a.0));
+        out.into_iter().map(|(_, c)| c).collect()
+    }
+
+    /// The cell `steps` cells ahead of `id` along `heading` (rounded to the nearest of the
+    /// 8 directions), if inside the grid: what a fast client reaches after the neighbour.
+    pub fn ahead(&self, id: CellId, heading: DVec2, steps: u32) -> Option<CellId> {
+        let (ix, iy) = self.coords(id)?;
+        let h = heading.normalize_or_zero();
+        if h == DVec2::ZERO {
+            return None;
+        }
+        let (dx, dy) = (h.x.round() as i64, h.y.round() as i64);
+        let (jx, jy) = (ix as i64 + dx * steps as i64, iy as i64 + dy * steps as i64);
+        if jx < 0 || jy < 0 || jx >= self.nx as i64 || jy >= self.ny as i64 {
+            return None;
+        }
+        Some(jy as u32 * self.nx + jx as u32)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid() -> CellGrid {
+        let b = Aabb3::new(DVec3::new(-50.0, 0.0, 0.0), DVec3::new(250.0, 180.0, 30.0));
+        CellGrid::cover(&b, 100.0).unwrap()
+    }
+
+    #[test]
+    fn covers_the_scene_rectangle() {
+        let g = grid();
+        assert_eq!((g.nx, g.ny), (3, 2));
+        assert_eq!(g.top_m, 30.0);
+        assert_eq!(g.cell(4).unwrap().to_array(), [50.0, 100.0, 1.5, 150.0, 200.0, 2.0]);
+        assert!(g.cell(6).is_none());
+    }
+
+    #[test]
+    fn locates_points_and_rejects_outside_ones() {
+        let g = grid();
+        assert_eq!(g.locate(DVec3::new(-50.0, 0.0, 1.7)), Ok(0));
+        assert_eq!(g.locate(DVec3::new(60.0, 150.0, 1.7)), Ok(4));
+        // The far border belongs to the last cell.
+        assert_eq!(g.locate(DVec3::new(250.0, 200.0, 0.0)), Ok(5));
+        assert!(matches!(
+            g.locate(DVec3::new(-50.1, 0.0, 1.7)),
+            Err(PointError::Outside(..))
+        ));
+        assert!(matches!(
+            g.locate(DVec3::new(0.0, 0.0, 31.0)),
+            Err(PointError::Outside(..))
+        ));
+        assert_eq!(
+            g.locate(DVec3::new(f64::NAN, 0.0, 1.0)),
+            Err(PointError::NotFinite)
+        );
+    }
+
+    #[test]
+    fn neighbours_ahead_come_first() {
+        let b = Aabb3::new(DVec3::ZERO, DVec3::new(300.0, 300.0, 10.0));
+        let g = CellGrid::cover(&b, 100.0).unwrap();
+        let n = g.neighbours(4, DVec2::new(1.0, 0.0));
+        assert_eq!(n.len(), 8);
+        assert_eq!(n[0], 5, "straight ahead first");
+        let mut front: Vec<_> = n[1..3].to_vec();
+        front.sort();
+        assert_eq!(front, vec![2, 8], "then the two front diagonals");
+        assert_eq!(n[7], 3, "straight behind last");
+        // A corner cell has 3 neighbours.
+        assert_eq!(g.neighbours(0, DVec2::ZERO).len(), 3);
+        assert_eq!(g.ahead(4, DVec2::new(0.1, 0.9), 1), Some(7));
+        assert_eq!(g.ahead(4, DVec2::new(1.0, 0.0), 2), None);
+    }
+
+    #[test]
+    fn rejects_bad_sizes() {
+        let b = Aabb3::new(DVec3::ZERO, DVec3::new(10.0, 10.0, 10.0));
+        assert!(matches!(CellGrid::cover(&b, 0.0), Err(GridError::BadSize(_))));
+        assert!(matches!(CellGrid::cover(&b, f64::NAN), Err(GridError::BadSize(_))));
+        assert!(matches!(CellGrid::cover(&b, 1e-9), Err(GridError::TooMany(..))));
+        assert_eq!(CellGrid::cover(&Aabb3::EMPTY, 1.0), Err(GridError::EmptyScene));
+    }
+}
