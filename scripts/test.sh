@@ -17,5 +17,5 @@ if [ ! -f crates/server/e2e/node_modules/.package-lock.json ] \
   || [ crates/server/e2e/package-lock.json -nt crates/server/e2e/node_modules/.package-lock.json ]; then
   (cd crates/server/e2e && npm ci --no-audit --no-fund)
 fi
-cargo build -p sightline
+cargo build --workspace --bins
 node crates/server/e2e/walk.test.mjs

@@ -171,7 +171,7 @@ pub fn decode(bytes: &[u8]) -> Result<Vec<DecodedObject>, DecodeError> {
         let kind = r.u32()?;
         let nv = r.u32()? as usize;
         let ni = r.u32()? as usize;
-        if ni % 3 != 0 {
+        if !ni.is_multiple_of(3) {
             return Err(DecodeError("index count not a multiple of 3"));
         }
         let pos = r.take(nv.checked_mul(12).ok_or(DecodeError("too long"))?)?;

@@ -65,7 +65,8 @@ impl CellGrid {
         let nx = (size.x / cell_size_m).ceil().max(1.0);
         let ny = (size.y / cell_size_m).ceil().max(1.0);
         let total = nx * ny;
-        if !(total <= MAX_CELLS as f64) {
+        // Written so that a NaN total is rejected too.
+        if total.is_nan() || total > MAX_CELLS as f64 {
             return Err(GridError::TooMany(total as u64, cell_size_m));
         }
         Ok(CellGrid {
@@ -135,15 +136,7 @@ impl CellGrid {
         let s = self.cell_size_m;
         let x0 = self.origin[0] + ix as f64 * s;
         let y0 = self.origin[1] + iy as f64 * s;
-        ViewCell::from_array([
-            x0,
-            y0,
-            self.z_range_m[0],
-            x0 + s,
-            y0 + s,
-            self.z_range_m[1],
-        ])
-        .ok()
+        ViewCell::from_array([x0, y0, self.z_range_m[0], x0 + s, y0 + s, self.z_range_m[1]]).ok()
     }
 
     /// The (up to) 8 cells adjacent to `id`, ordered so that those lying ahead along
@@ -204,7 +197,10 @@ mod tests {
         let g = grid();
         assert_eq!((g.nx, g.ny), (3, 2));
         assert_eq!(g.top_m, 30.0);
-        assert_eq!(g.cell(4).unwrap().to_array(), [50.0, 100.0, 1.5, 150.0, 200.0, 2.0]);
+        assert_eq!(
+            g.cell(4).unwrap().to_array(),
+            [50.0, 100.0, 1.5, 150.0, 200.0, 2.0]
+        );
         assert!(g.cell(6).is_none());
     }
 
@@ -249,9 +245,21 @@ mod tests {
     #[test]
     fn rejects_bad_sizes() {
         let b = Aabb3::new(DVec3::ZERO, DVec3::new(10.0, 10.0, 10.0));
-        assert!(matches!(CellGrid::cover(&b, 0.0), Err(GridError::BadSize(_))));
-        assert!(matches!(CellGrid::cover(&b, f64::NAN), Err(GridError::BadSize(_))));
-        assert!(matches!(CellGrid::cover(&b, 1e-9), Err(GridError::TooMany(..))));
-        assert_eq!(CellGrid::cover(&Aabb3::EMPTY, 1.0), Err(GridError::EmptyScene));
+        assert!(matches!(
+            CellGrid::cover(&b, 0.0),
+            Err(GridError::BadSize(_))
+        ));
+        assert!(matches!(
+            CellGrid::cover(&b, f64::NAN),
+            Err(GridError::BadSize(_))
+        ));
+        assert!(matches!(
+            CellGrid::cover(&b, 1e-9),
+            Err(GridError::TooMany(..))
+        ));
+        assert_eq!(
+            CellGrid::cover(&Aabb3::EMPTY, 1.0),
+            Err(GridError::EmptyScene)
+        );
     }
 }

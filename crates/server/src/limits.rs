@@ -111,7 +111,7 @@ fn request_token(req: &Request) -> Option<String> {
     let q = req.uri().query()?;
     q.split('&')
         .find_map(|kv| kv.strip_prefix("token="))
-        .map(|t| percent_decode(t))
+        .map(percent_decode)
 }
 
 /// Minimal `%XX` / `+` decoding for query values.
