@@ -6,8 +6,12 @@
 //! [`ImportError`] naming the feature and the problem. Nothing panics on bad input.
 //! See `docs/import.md` for the formats, conventions and warning kinds.
 
+pub mod cityjson;
 pub mod geojson;
+pub mod gltf;
 pub mod height;
+pub mod mesh_bounds;
+pub mod obj;
 pub mod project;
 pub mod validate;
 
@@ -67,8 +71,15 @@ pub fn load(path: &Path, opts: &ImportOptions) -> Result<Scene, ImportError> {
         "json" => {
             let root: serde_json::Value = serde_json::from_slice(&read(path)?)
                 .map_err(|e| ImportError::Format(format!("invalid JSON: {e}")))?;
-            geojson::from_value(&root, opts)
+            if root.get("type").and_then(serde_json::Value::as_str) == Some("CityJSON") {
+                cityjson::from_value(&root, opts)
+            } else {
+                geojson::from_value(&root, opts)
+            }
         }
+        "zip" => cityjson::parse_zip(&read(path)?, opts),
+        "obj" => obj::parse(&read(path)?),
+        "gltf" | "glb" => gltf::parse(&read(path)?, path.parent()),
         _ => Err(ImportError::Unsupported(path.display().to_string())),
     }
 }

@@ -1,0 +1,112 @@
+//! The bad-input corpus (`tests/bad/`, SPEC §8): every malformed file gives exit code 1
+//! and exactly one `error:` line naming the problem (`err-*`), or loads with a counted
+//! warning of the expected kind (`warn-*`); never a panic, never an output file.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn corpus() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/bad")
+}
+
+fn cases() -> Vec<(String, String)> {
+    let text = std::fs::read_to_string(corpus().join("expected.txt")).unwrap();
+    text.lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .map(|l| {
+            let (f, e) = l.split_once('\t').unwrap();
+            (f.to_string(), e.to_string())
+        })
+        .collect()
+}
+
+fn sightline(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_sightline"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn corpus_is_large_enough_and_listed() {
+    let cases = cases();
+    assert!(cases.len() >= 25, "{} cases", cases.len());
+    for entry in std::fs::read_dir(corpus()).unwrap() {
+        let name = entry.unwrap().file_name().to_string_lossy().into_owned();
+        if name != "expected.txt" {
+            assert!(
+                cases.iter().any(|(f, _)| *f == name),
+                "{name} not in expected.txt"
+            );
+        }
+    }
+}
+
+#[test]
+fn every_bad_input_fails_cleanly_or_warns() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut failures = Vec::new();
+    for (file, expect) in cases() {
+        let path = corpus().join(&file);
+        let path = path.to_str().unwrap();
+        if file.starts_with("err-") {
+            let (code, _, err) = sightline(&["info", path]);
+            let lines: Vec<&str> = err.lines().collect();
+            let ok = code == 1
+                && !err.contains("panicked")
+                && lines.len() == 1
+                && lines[0].starts_with("error: ")
+                && lines[0].contains(&expect);
+            if !ok {
+                failures.push(format!(
+                    "{file}: exit {code}, stderr {err:?}, expected {expect:?}"
+                ));
+            }
+            // A command that writes a file leaves nothing behind.
+            let out = dir.path().join(format!("{file}.cells.json"));
+            let (code, _, err) = sightline(&["cells", path, "-o", out.to_str().unwrap()]);
+            if code != 1 || err.contains("panicked") || out.exists() {
+                failures.push(format!(
+                    "{file}: cells exit {code}, output left: {}",
+                    out.exists()
+                ));
+            }
+        } else {
+            let (code, stdout, err) = sightline(&["info", path, "--json"]);
+            let ok = code == 0
+                && !err.contains("panicked")
+                && serde_json::from_str::<serde_json::Value>(&stdout)
+                    .ok()
+                    .and_then(|v| v["warning_counts"][expect.as_str()].as_u64())
+                    .is_some_and(|n| n > 0);
+            if !ok {
+                failures.push(format!("{file}: exit {code}, stdout {stdout}, stderr {err:?}, expected warning {expect}"));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn info_reports_real_scenes() {
+    let data = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data");
+    for (file, n) in [
+        ("lyon1_bdtopo.geojson", 2570),
+        ("denhaag_tile01_lod2.geojson", 1918),
+    ] {
+        let (code, stdout, err) = sightline(&["info", data.join(file).to_str().unwrap(), "--json"]);
+        assert_eq!(code, 0, "{err}");
+        let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+        assert_eq!(v["objects"], n);
+        assert_eq!(v["blocks"], n);
+        assert_eq!(v["bounds"].as_array().unwrap().len(), 6);
+        let (code, text, _) = sightline(&["info", data.join(file).to_str().unwrap()]);
+        assert_eq!(code, 0);
+        assert!(text.contains(&format!("objects:   {n}")), "{text}");
+    }
+}
