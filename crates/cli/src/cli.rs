@@ -134,6 +134,9 @@ pub enum Command {
         method: String,
         #[arg(long)]
         resolution: Option<u32>,
+        /// ext-proj: run the occlusion sweep.
+        #[arg(long)]
+        sweep: bool,
         #[arg(short, long)]
         out: PathBuf,
         /// Continue an interrupted build from its journal.

@@ -1,8 +1,185 @@
-//! `sightline build`.
+//! `sightline build`, `sightline merge` and `sightline query`: the PVS store (SPEC §5, §6).
 
-use crate::cli::Command;
+use crate::cli::{Command, SceneArg};
+use crate::common::{load_scene, print_json, progress};
+use anyhow::Context;
+use serde::Serialize;
+use sightline_geom::{DVec3, ViewCell};
+use sightline_methods::{create, MethodOptions};
+use sightline_pvs::build::{journal_path, write_atomic};
+use sightline_pvs::{build, merge, BuildOptions, PvsFile, Shard};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
 
 pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
-    let _ = (cmd, quiet);
-    anyhow::bail!("`sightline build` is not implemented yet")
+    match cmd {
+        Command::Build {
+            scene,
+            cells,
+            method,
+            resolution,
+            sweep,
+            out,
+            resume,
+            shard,
+        } => run_build(
+            &scene,
+            &cells,
+            &method,
+            MethodOptions {
+                resolution_px: resolution,
+                sweep,
+                ..Default::default()
+            },
+            &out,
+            resume,
+            shard.as_deref(),
+            quiet,
+        ),
+        Command::Merge { inputs, out } => run_merge(&inputs, &out),
+        Command::Query { pvs, at, json } => run_query(&pvs, at, json),
+        _ => unreachable!("dispatched by commands::run"),
+    }
+}
+
+/// Read a cells.json: a JSON array of `[x0,y0,z0,x1,y1,z1]` boxes.
+pub fn read_cells(path: &Path) -> anyhow::Result<Vec<ViewCell>> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let cells: Vec<ViewCell> = serde_json::from_str(&text).with_context(|| {
+        format!(
+            "{}: expected a JSON array of [x0,y0,z0,x1,y1,z1] cells",
+            path.display()
+        )
+    })?;
+    anyhow::ensure!(!cells.is_empty(), "{}: no cells", path.display());
+    Ok(cells)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run_build(
+    scene_arg: &SceneArg,
+    cells_path: &Path,
+    method: &str,
+    method_opts: MethodOptions,
+    out: &Path,
+    resume: bool,
+    shard: Option<&str>,
+    quiet: bool,
+) -> anyhow::Result<()> {
+    let shard = shard
+        .map(|s| Shard::parse(s, |k| std::env::var(k).ok()))
+        .transpose()?;
+    let cells = read_cells(cells_path)?;
+    let scene = Arc::new(load_scene(scene_arg)?);
+    let m = create(method, scene.clone(), &method_opts)?;
+    let opts = BuildOptions {
+        resume,
+        shard,
+        ..BuildOptions::default()
+    };
+    let pb = progress(cells.len() as u64, quiet, "build");
+    let report = |done: usize, total: usize| {
+        pb.set_length(total as u64);
+        pb.set_position(done as u64);
+    };
+    let t = Instant::now();
+    let stats = build(&scene, m.as_ref(), &cells, out, &opts, &report).with_context(|| {
+        format!(
+            "building {} (finished cells are kept in {}; rerun with --resume)",
+            out.display(),
+            journal_path(out).display()
+        )
+    })?;
+    pb.finish_and_clear();
+    let shard_note = shard.map_or(String::new(), |s| {
+        format!(" (shard {}/{})", s.index, s.count)
+    });
+    if !quiet {
+        eprintln!(
+            "wrote {}{shard_note}: {} cells ({} resumed), method {}, {} bytes ({:.0} B/cell), {:.1} s ({:.1} cells/s)",
+            out.display(),
+            stats.cells,
+            stats.resumed,
+            m.name(),
+            stats.bytes,
+            stats.bytes as f64 / stats.cells as f64,
+            t.elapsed().as_secs_f64(),
+            stats.computed as f64 / stats.compute_seconds.max(1e-9),
+        );
+    }
+    Ok(())
+}
+
+fn run_merge(inputs: &[PathBuf], out: &Path) -> anyhow::Result<()> {
+    let files = inputs
+        .iter()
+        .map(|p| {
+            PvsFile::open(p)
+                .with_context(|| format!("cannot open {}", p.display()))
+                .map(|f| (p.display().to_string(), f))
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let bytes = merge(&files)?;
+    write_atomic(out, &bytes).with_context(|| format!("cannot write {}", out.display()))?;
+    eprintln!(
+        "merged {} files into {}: {} cells, {} bytes",
+        files.len(),
+        out.display(),
+        files[0].1.cells().len(),
+        bytes.len()
+    );
+    Ok(())
+}
+
+#[derive(Serialize)]
+struct QueryReport {
+    cell: ViewCell,
+    index: usize,
+    method: String,
+    visible: Vec<u32>,
+}
+
+fn run_query(path: &Path, at: [f64; 3], json: bool) -> anyhow::Result<()> {
+    let file = PvsFile::open(path).with_context(|| format!("cannot open {}", path.display()))?;
+    let p = DVec3::from_array(at);
+    let index = file.locate(p).with_context(|| {
+        format!(
+            "no cell of {} contains the point {},{},{}",
+            path.display(),
+            at[0],
+            at[1],
+            at[2]
+        )
+    })?;
+    let visible = file
+        .pvs(index)
+        .with_context(|| format!("cannot read cell {index} of {}", path.display()))?;
+    let report = QueryReport {
+        cell: file.cells()[index],
+        index,
+        method: file.header().method.clone(),
+        visible,
+    };
+    if json {
+        print_json(&report)
+    } else {
+        let c = report.cell.to_array();
+        println!(
+            "cell {index} [{}, {}, {}, {}, {}, {}] ({}): {} of {} objects visible",
+            c[0],
+            c[1],
+            c[2],
+            c[3],
+            c[4],
+            c[5],
+            report.method,
+            report.visible.len(),
+            file.header().object_count
+        );
+        let ids: Vec<String> = report.visible.iter().map(|i| i.to_string()).collect();
+        println!("{}", ids.join(" "));
+        Ok(())
+    }
 }
