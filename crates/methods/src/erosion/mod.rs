@@ -177,7 +177,12 @@ impl ErosionMethod {
                     });
                 }
                 Variant::Full | Variant::Segment => {
-                    for piece in shrink::pieces(&top.ring, ctx.rect) {
+                    let pieces = shrink::pieces(&top.ring, ctx.rect);
+                    if pieces.is_empty() {
+                        // Degenerate (zero-area) top face: keep the object.
+                        return None;
+                    }
+                    for piece in pieces {
                         let test = match piece.region {
                             Region::Centre => return None,
                             Region::Side(el) => {
@@ -371,3 +376,4 @@ impl VisibilityMethod for ErosionMethod {
         Ok(visible)
     }
 }
+

@@ -23,6 +23,7 @@
 //! * the *centre* piece (overlapping the cell's footprint): visible.
 
 use super::erode::Element;
+use sightline_geom::polygon::ring_signed_area;
 use sightline_geom::{Aabb2, DVec2};
 
 /// Sutherland–Hodgman clip of a ring to the box `[lo, hi]` (infinite bounds allowed).
@@ -103,7 +104,9 @@ pub fn pieces(ring: &[DVec2], cell: Aabb2) -> Vec<Piece> {
                 continue;
             }
             let clipped = clip_ring(ring, DVec2::new(xl, yl), DVec2::new(xh, yh));
-            if clipped.is_empty() {
+            // A zero-area piece lies on a dividing line, which belongs (closed) to the
+            // neighbouring pieces as well: drop it.
+            if clipped.is_empty() || ring_signed_area(&clipped).abs() <= 1e-12 {
                 continue;
             }
             let region = match (ix, iy) {

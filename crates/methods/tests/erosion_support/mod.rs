@@ -115,6 +115,16 @@ pub fn surface_samples(o: &Object, per_edge: usize, levels: usize) -> Vec<DVec3>
             }
         }
         out.push(c.extend(p.top));
+        // Interior samples of the top face.
+        let bb = p.footprint.bbox();
+        for i in 0..8 {
+            for j in 0..8 {
+                let q = bb.min + bb.size() * DVec2::new((i as f64 + 0.5) / 8.0, (j as f64 + 0.5) / 8.0);
+                if p.footprint.contains(q) {
+                    out.push(q.extend(p.top));
+                }
+            }
+        }
     }
     out
 }
