@@ -1,0 +1,75 @@
+//! The hierarchical space subdivision of §3 (Koltun et al. 2001): a kd-tree over the
+//! occludees' boxes. Each node holds the tight bounding box of the objects below it, so
+//! a child's box is contained in its parent's, and a node hidden from the viewcell hides
+//! its whole subtree.
+
+use sightline_geom::Aabb3;
+
+/// Objects per leaf.
+const LEAF_SIZE: usize = 4;
+
+#[derive(Clone, Debug)]
+pub(crate) enum NodeKind {
+    Leaf { first: u32, len: u32 },
+    Inner { left: u32, right: u32 },
+}
+
+#[derive(Clone, Debug)]
+pub(crate) struct Node {
+    pub bbox: Aabb3,
+    pub kind: NodeKind,
+}
+
+/// A kd-tree over items `(id, box)`; `items` is permuted so that leaves own ranges.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct KdTree {
+    pub nodes: Vec<Node>,
+    pub items: Vec<(u32, Aabb3)>,
+}
+
+impl KdTree {
+    pub(crate) fn build(mut items: Vec<(u32, Aabb3)>) -> Self {
+        let mut nodes = Vec::new();
+        if !items.is_empty() {
+            let n = items.len();
+            build_rec(&mut items, 0, n, &mut nodes);
+        }
+        KdTree { nodes, items }
+    }
+
+    pub(crate) fn leaf_items(&self, first: u32, len: u32) -> &[(u32, Aabb3)] {
+        &self.items[first as usize..(first + len) as usize]
+    }
+}
+
+fn build_rec(items: &mut [(u32, Aabb3)], first: usize, len: usize, nodes: &mut Vec<Node>) -> u32 {
+    let slice = &mut items[first..first + len];
+    let bbox = slice.iter().fold(Aabb3::EMPTY, |b, (_, x)| b.union(*x));
+    let id = nodes.len() as u32;
+    nodes.push(Node {
+        bbox,
+        kind: NodeKind::Leaf {
+            first: first as u32,
+            len: len as u32,
+        },
+    });
+    if len <= LEAF_SIZE {
+        return id;
+    }
+    // Split at the median centre along the longer horizontal extent of the centres.
+    let cb = slice
+        .iter()
+        .fold(Aabb3::EMPTY, |b, (_, x)| b.grow(x.center()));
+    let axis = if cb.size().x >= cb.size().y { 0 } else { 1 };
+    if cb.size()[axis] <= 0.0 {
+        return id; // all centres coincide: keep a (large) leaf
+    }
+    let mid = len / 2;
+    slice.select_nth_unstable_by(mid, |a, b| {
+        a.1.center()[axis].total_cmp(&b.1.center()[axis])
+    });
+    let left = build_rec(items, first, mid, nodes);
+    let right = build_rec(items, first + mid, len - mid, nodes);
+    nodes[id as usize].kind = NodeKind::Inner { left, right };
+    id
+}

@@ -1,0 +1,326 @@
+//! Dual ray space from-region visibility — Koltun, Chrysanthou & Cohen-Or,
+//! *Hardware-accelerated from-region visibility using a dual ray space* (EGWR 2001).
+//!
+//! **Guarantee**: the PVS of a viewcell contains every object visible from the cell's
+//! free space (SPEC §3); it may contain hidden ones.
+//!
+//! Methods:
+//! * `dual-ray` — §3 + §4 + §5.2: kd-tree traversal, box-to-box tests reduced to the
+//!   plane, planar visibility discretized in a ray space of `resolution` rows
+//!   (default 128, refined hierarchically from 16);
+//! * `dual-ray-exact` — the same with the exact planar algorithm of §5.1.
+//!
+//! Every `dual-ray` PVS contains the `dual-ray-exact` PVS of the same cell.
+//!
+//! Pipeline (one module per step):
+//! * [`occluders`] — the occluders: ground-based inner prisms, touching ones fused
+//!   (NOTES §1), decomposed into slabs along x and y, once per scene;
+//! * [`kdtree`] — the hierarchical subdivision of the occludees (§3): a node hidden
+//!   from the cell stops the recursion; objects of visible leaves are tested one by one
+//!   (their outer prisms' boxes);
+//! * [`plane`] — reduction of a box-to-box test to a planar problem (§4): upper rims,
+//!   shaft, ceiling plane `T`, occluders cut by `T`, dual ray space `RS`;
+//! * [`discrete`] — §5.2 with exact union coverage per row (NOTES §2);
+//! * [`exact`] — §5.1 with exact predicates.
+//!
+//! Degenerate configurations: boxes overlapping in both x and y (the cell inside a
+//! node, an object straddling the cell) have no separating planes and count as visible;
+//! boxes separated along both axes are tested along each (either one hiding suffices —
+//! each yields a valid necessary condition, with its own supporting plane `T`); equal
+//! heights give a horizontal `T`; touching boxes give an empty shaft (visible); cells
+//! cutting through buildings see from their free part, which the shaft construction
+//! respects because rays starting inside an occluder are blocked anyway.
+//!
+//! ```
+//! use std::sync::Arc;
+//! use sightline_methods::{create, MethodOptions};
+//! use sightline_scene::{Scene, Object};
+//! use sightline_geom::{Polygon, DVec2, ViewCell};
+//! let r = |x0, y0, x1, y1| Polygon::rect(DVec2::new(x0, y0), DVec2::new(x1, y1));
+//! let scene = Arc::new(Scene::from_objects(vec![
+//!     Object::block(None, r(20.0, -50.0, 22.0, 50.0), 0.0, 10.0), // a long wall
+//!     Object::block(None, r(40.0, 0.0, 50.0, 10.0), 0.0, 6.0),    // low house behind it
+//! ]));
+//! let m = create("dual-ray", scene, &MethodOptions::default()).unwrap();
+//! let cell: ViewCell = "0,0,1.5,10,10,2".parse().unwrap();
+//! assert_eq!(m.pvs(&cell).unwrap(), vec![0]);
+//! ```
+
+pub mod discrete;
+pub mod exact;
+pub mod kdtree;
+pub mod occluders;
+pub mod plane;
+mod table1;
+
+pub use table1::{occluded_area_m2, table1, Table1Row};
+
+use crate::{MethodError, MethodOptions, VisibilityMethod};
+use kdtree::{KdTree, NodeKind};
+use occluders::{Axis, Decomposition};
+use plane::{local_rect, Planar, Scratch};
+use rayon::prelude::*;
+use sightline_geom::{Aabb3, DVec2, DVec3, ViewCell};
+use sightline_scene::Scene;
+use std::sync::Arc;
+
+/// Default ray-space resolution of `dual-ray` (the paper's choice, §6).
+pub const DEFAULT_RESOLUTION: u32 = 128;
+
+/// An object with more outer prisms than this is tested by its single bounding box.
+const MAX_BOXES_PER_OBJECT: usize = 8;
+
+/// Which planar algorithm answers the box-to-box tests.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Planarity {
+    /// §5.2, with this many rows (rounded up to 16·2^k).
+    Discrete { resolution_px: u32 },
+    /// §5.1.
+    Exact,
+}
+
+/// Counters of one PVS computation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TraversalStats {
+    /// Box-to-box tests that built a planar problem.
+    pub planar_tests: u64,
+    /// Tests answered without one (overlapping boxes).
+    pub trivial_tests: u64,
+    /// Occluder pieces gathered over all planar problems.
+    pub pieces: u64,
+}
+
+/// The dual ray space method prepared for one scene.
+pub struct DualRay {
+    name: &'static str,
+    planarity: Planarity,
+    scene: Arc<Scene>,
+    /// Local frame: scene coordinates minus `origin` (precision, NOTES §3).
+    origin: DVec2,
+    decomp_x: Decomposition,
+    decomp_y: Decomposition,
+    tree: KdTree,
+    /// Objects without a usable bound: always reported.
+    always: Vec<u32>,
+}
+
+/// Prepare `dual-ray` or `dual-ray-exact` for `scene`.
+pub fn create(
+    name: &'static str,
+    scene: Arc<Scene>,
+    opts: &MethodOptions,
+) -> Result<Box<dyn VisibilityMethod>, MethodError> {
+    let planarity = match name {
+        "dual-ray" => {
+            let r = opts.resolution_px.unwrap_or(DEFAULT_RESOLUTION);
+            if r == 0 || r > 1 << 20 {
+                return Err(MethodError::Other(format!(
+                    "dual-ray: resolution {r} out of range (1..=1048576)"
+                )));
+            }
+            Planarity::Discrete { resolution_px: r }
+        }
+        "dual-ray-exact" => Planarity::Exact,
+        n => return Err(MethodError::Unknown(n.to_string())),
+    };
+    Ok(Box::new(DualRay::new(name, scene, planarity)))
+}
+
+impl DualRay {
+    /// Prepare the method: fused occluder decompositions along x and y, kd-tree of the
+    /// occludees.
+    pub fn new(name: &'static str, scene: Arc<Scene>, planarity: Planarity) -> Self {
+        let origin = if scene.bounds.is_empty() {
+            DVec2::ZERO
+        } else {
+            scene.bounds.center().truncate().round()
+        };
+        let occ = occluders::collect_occluders(&scene, origin);
+        let clusters = occluders::clusters(&occ);
+        let (decomp_x, decomp_y) = rayon::join(
+            || occluders::decompose(&occ, &clusters, Axis::X),
+            || occluders::decompose(&occ, &clusters, Axis::Y),
+        );
+        let o3 = origin.extend(0.0);
+        let mut items = Vec::new();
+        let mut always = Vec::new();
+        for (id, o) in scene.objects.iter().enumerate() {
+            let mut boxes: Vec<Aabb3> = o
+                .outer
+                .iter()
+                .map(|p| p.aabb())
+                .filter(|b| !b.is_empty())
+                .collect();
+            if boxes.is_empty() || boxes.len() > MAX_BOXES_PER_OBJECT {
+                let b = boxes.iter().fold(o.bounds, |acc, b| acc.union(*b));
+                boxes = vec![b];
+            }
+            let ok = boxes
+                .iter()
+                .all(|b| !b.is_empty() && b.min.is_finite() && b.max.is_finite());
+            if !ok {
+                always.push(id as u32);
+                continue;
+            }
+            for b in boxes {
+                items.push((id as u32, Aabb3::new(b.min - o3, b.max - o3)));
+            }
+        }
+        DualRay {
+            name,
+            planarity,
+            scene,
+            origin,
+            decomp_x,
+            decomp_y,
+            tree: KdTree::build(items),
+            always,
+        }
+    }
+
+    /// The planar algorithm in use.
+    pub fn planarity(&self) -> Planarity {
+        self.planarity
+    }
+
+    /// The scene this method was prepared for.
+    pub fn scene(&self) -> &Arc<Scene> {
+        &self.scene
+    }
+
+    /// The PVS of `cell` and the counters of its traversal.
+    pub fn pvs_with_stats(&self, cell: &ViewCell) -> (Vec<u32>, TraversalStats) {
+        let o3 = self.origin.extend(0.0);
+        let a = Aabb3::new(cell.min - o3, cell.max - o3);
+        let mut scratch = Scratch::default();
+        let mut stats = TraversalStats::default();
+        let mut out: Vec<u32> = self.always.clone();
+        let mut stack: Vec<u32> = Vec::new();
+        if !self.tree.nodes.is_empty() {
+            stack.push(0);
+        }
+        while let Some(n) = stack.pop() {
+            let node = &self.tree.nodes[n as usize];
+            match node.kind {
+                NodeKind::Inner { left, right } => {
+                    if self.hidden(&a, &node.bbox, &mut scratch, &mut stats) {
+                        continue;
+                    }
+                    stack.push(right);
+                    stack.push(left);
+                }
+                NodeKind::Leaf { first, len } => {
+                    let items = self.tree.leaf_items(first, len);
+                    // A leaf of one box is the object's own test.
+                    if items.len() > 1 && self.hidden(&a, &node.bbox, &mut scratch, &mut stats) {
+                        continue;
+                    }
+                    for (id, b) in items {
+                        if out.last() == Some(id) {
+                            continue;
+                        }
+                        if !self.hidden(&a, b, &mut scratch, &mut stats) {
+                            out.push(*id);
+                        }
+                    }
+                }
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        (out, stats)
+    }
+
+    /// The PVS of `cell` and of its 8 neighbours (the cells translated by ±1 cell size in
+    /// x and y), computed in parallel: the building block of the remote walkthrough of
+    /// §6 (Fig. 5). Row-major from the lowest `y`, the cell itself at index 4.
+    pub fn pvs_with_neighbours(&self, cell: &ViewCell) -> [(ViewCell, Vec<u32>); 9] {
+        let s = cell.size();
+        let cells: Vec<ViewCell> = (0..9)
+            .map(|k| {
+                let d = DVec3::new(
+                    ((k % 3) as f64 - 1.0) * s.x,
+                    ((k / 3) as f64 - 1.0) * s.y,
+                    0.0,
+                );
+                ViewCell {
+                    min: cell.min + d,
+                    max: cell.max + d,
+                }
+            })
+            .collect();
+        let pvs: Vec<Vec<u32>> = cells.par_iter().map(|c| self.pvs_with_stats(c).0).collect();
+        let mut it = cells.into_iter().zip(pvs);
+        std::array::from_fn(|_| it.next().expect("nine cells"))
+    }
+
+    /// §3–§5: whether the boxes `a` (the cell) and `b` are hidden from each other, in
+    /// local coordinates.
+    fn hidden(
+        &self,
+        a: &Aabb3,
+        b: &Aabb3,
+        scratch: &mut Scratch,
+        stats: &mut TraversalStats,
+    ) -> bool {
+        let gap_x = (b.min.x - a.max.x).max(a.min.x - b.max.x);
+        let gap_y = (b.min.y - a.max.y).max(a.min.y - b.max.y);
+        if gap_x <= 0.0 && gap_y <= 0.0 {
+            // Overlapping (or touching) footprints: no separating planes F_A, F_B.
+            stats.trivial_tests += 1;
+            return false;
+        }
+        let mut axes = [(gap_x, Axis::X), (gap_y, Axis::Y)];
+        if gap_y > gap_x {
+            axes.swap(0, 1);
+        }
+        for (gap, axis) in axes {
+            if gap <= 0.0 {
+                continue;
+            }
+            let (ra, rb) = (local_rect(a, axis), local_rect(b, axis));
+            let (lo, lo_top, hi, hi_top) = if ra.x1 < rb.x0 {
+                (ra, a.max.z, rb, b.max.z)
+            } else {
+                (rb, b.max.z, ra, a.max.z)
+            };
+            let decomp = match axis {
+                Axis::X => &self.decomp_x,
+                Axis::Y => &self.decomp_y,
+            };
+            Planar::build(scratch, decomp, lo, lo_top, hi, hi_top);
+            stats.planar_tests += 1;
+            stats.pieces += scratch.planar.pieces.len() as u64;
+            let hidden = match self.planarity {
+                Planarity::Discrete { resolution_px } => discrete::hidden(scratch, resolution_px),
+                Planarity::Exact => exact::hidden(scratch),
+            };
+            if hidden {
+                return true;
+            }
+        }
+        false
+    }
+}
+
+impl VisibilityMethod for DualRay {
+    fn name(&self) -> &'static str {
+        self.name
+    }
+
+    fn params(&self) -> Vec<(String, String)> {
+        match self.planarity {
+            Planarity::Discrete { resolution_px } => {
+                vec![("resolution".to_string(), resolution_px.to_string())]
+            }
+            Planarity::Exact => Vec::new(),
+        }
+    }
+
+    fn pvs(&self, cell: &ViewCell) -> Result<Vec<u32>, MethodError> {
+        if !(cell.min.is_finite() && cell.max.is_finite()) || cell.min.cmpgt(cell.max).any() {
+            return Err(MethodError::BadCell(cell.to_string()));
+        }
+        Ok(self.pvs_with_stats(cell).0)
+    }
+}

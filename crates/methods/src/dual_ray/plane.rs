@@ -1,0 +1,554 @@
+//! Reduction of a box-to-box visibility query to a planar problem (§4 of Koltun et al.
+//! 2001) and its dual ray space (§5.1).
+//!
+//! Two boxes `A` (the viewcell) and `B` (a kd-node or an object's bound) are separated
+//! along an axis: faces `F_A: x = xa` and `F_B: x = xb` (`xa < xb`, `x` the *along*
+//! coordinate of the axis, `y` the across one; the box on the low side is called `lo`,
+//! the other `hi`, whichever of `A`, `B` it is — visibility is symmetric).
+//!
+//! * **Observation 1** (upper rims): if a segment `s` from `A` to `B` misses every
+//!   occluder, so does the vertical wall above it, because the occluders are 2.5D and
+//!   stand on the ground.
+//! * **Ceiling `T`**: any non-vertical plane above both boxes meets that wall in a
+//!   segment `s'` that misses every occluder. We take the lowest plane through two
+//!   parallel horizontal top edges (one per box) that supports both boxes from above:
+//!   through the far edge of the lower box and the near edge of the higher one
+//!   ([`Ceiling::new`]); with equal heights it is horizontal. `T` then depends on `x`
+//!   only, so it cuts each occluder of height `h` along a line `x = x*(h)`.
+//! * **Planar problem**: `s'` crosses `F_A` at `(xa, u)` and `F_B` at `(xb, w)` inside
+//!   the shaft (the convex hull of the two rectangles, bounded by the planes `L`, `R`).
+//!   So `A`, `B` are mutually visible only if some ray `(u, w)` of the *dual ray space*
+//!   `RS = [u_lo, u_hi] × [w_lo, w_hi]` misses every occluder piece `{h > T}` between
+//!   `F_A` and `F_B` and passes through both rectangles.
+//!
+//! For a convex piece `C` with vertices `p = (x_p, y_p)`, the ray `(u, w)` meets
+//! the line through `p` iff `(1 - t_p) u + t_p w = y_p`, `t_p = (x_p - xa) / (xb - xa)`
+//! — the segment `T(p)` of the paper. The ray misses `C` iff all vertices lie strictly
+//! on one side, so for a fixed `w` the rays blocked by `C` are the interval
+//! `u ∈ [H_C(w), G_C(w)]`, `H_C = min_p g_p`, `G_C = max_p g_p`,
+//! `g_p(w) = (y_p - t_p w) / (1 - t_p)`. Every `g_p` is non-increasing in `w`, so the
+//! rays blocked by `C` for *every* `w` of a band `[w0, w1]` are exactly
+//! `u ∈ [H_C(w0), G_C(w1)]` ([`Planar::piece_band`]). This is what makes the union
+//! coverage of [`super::discrete`] exact per row, without cracks.
+
+use super::occluders::{Axis, Decomposition, Slab, Trap};
+use sightline_geom::Aabb3;
+
+/// Kept pieces of the ceiling cut are shrunk by this much along `x` (metres): rounding
+/// in `x*(h)` must never make an occluder larger than it is.
+const CUT_MARGIN_M: f64 = 1e-8;
+
+/// A rectangle `[x0, x1] × [y0, y1]` in local (along, across) coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Rect {
+    pub x0: f64,
+    pub x1: f64,
+    pub y0: f64,
+    pub y1: f64,
+}
+
+/// The ceiling plane `T`: height `z0 + slope * (x - x_anchor)`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Ceiling {
+    pub x_anchor: f64,
+    pub z0: f64,
+    pub slope: f64,
+}
+
+impl Ceiling {
+    /// The plane through the far top edge of the lower box and the near top edge of
+    /// the higher one (§4, Fig. 2): it supports both boxes from above and is the lowest
+    /// such plane between them.
+    pub(crate) fn new(lo: &Rect, lo_top: f64, hi: &Rect, hi_top: f64) -> Self {
+        if lo_top < hi_top {
+            // Rising towards `hi`: through lo's far edge (x0) and hi's near edge (x0).
+            let slope = (hi_top - lo_top) / (hi.x0 - lo.x0);
+            Ceiling {
+                x_anchor: lo.x0,
+                z0: lo_top,
+                slope,
+            }
+        } else if lo_top > hi_top {
+            // Falling towards `hi`: through lo's near edge (x1) and hi's far edge (x1).
+            let slope = (hi_top - lo_top) / (hi.x1 - lo.x1);
+            Ceiling {
+                x_anchor: lo.x1,
+                z0: lo_top,
+                slope,
+            }
+        } else {
+            Ceiling {
+                x_anchor: lo.x1,
+                z0: lo_top,
+                slope: 0.0,
+            }
+        }
+    }
+
+    #[inline]
+    pub(crate) fn at(&self, x: f64) -> f64 {
+        self.z0 + self.slope * (x - self.x_anchor)
+    }
+
+    /// The part `[k0, k1]` of `[x0, x1]` where `T < h`, shrunk by [`CUT_MARGIN_M`], or
+    /// `None`.
+    #[inline]
+    fn below(&self, h: f64, x0: f64, x1: f64) -> Option<(f64, f64)> {
+        let (k0, k1) = if self.slope == 0.0 {
+            if h > self.z0 {
+                (x0, x1)
+            } else {
+                return None;
+            }
+        } else {
+            let xs = self.x_anchor + (h - self.z0) / self.slope;
+            if self.slope > 0.0 {
+                (x0, x1.min(xs - CUT_MARGIN_M))
+            } else {
+                (x0.max(xs + CUT_MARGIN_M), x1)
+            }
+        };
+        (k1 > k0).then_some((k0, k1))
+    }
+}
+
+/// A convex occluder piece between `x0 < x1`: bottom line `yb0 → yb1`, top line
+/// `yt0 → yt1` (`yb <= yt`), in the planar problem's coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Piece {
+    pub x0: f64,
+    pub x1: f64,
+    pub yb0: f64,
+    pub yb1: f64,
+    pub yt0: f64,
+    pub yt1: f64,
+}
+
+/// `g_p(w) = alpha - beta * w` for a vertex with `x_p < xb`; vertices on `F_B` are
+/// flagged with `on_fb` (their `g` is ±∞ depending on `w`).
+#[derive(Clone, Copy, Debug)]
+struct Dual {
+    alpha: f64,
+    beta: f64,
+    y: f64,
+    on_fb: bool,
+}
+
+impl Dual {
+    #[inline]
+    fn new(x: f64, y: f64, len: f64) -> Self {
+        // Local coordinates: xa = 0, xb = len.
+        if x >= len {
+            Dual {
+                alpha: 0.0,
+                beta: 0.0,
+                y,
+                on_fb: true,
+            }
+        } else {
+            let d = len - x;
+            Dual {
+                alpha: y * len / d,
+                beta: x / d,
+                y,
+                on_fb: false,
+            }
+        }
+    }
+    /// Contribution to `H` (a minimum) at `w`.
+    #[inline]
+    fn h_at(&self, w: f64) -> f64 {
+        if self.on_fb {
+            if self.y <= w {
+                f64::NEG_INFINITY
+            } else {
+                f64::INFINITY
+            }
+        } else {
+            self.alpha - self.beta * w
+        }
+    }
+    /// Contribution to `G` (a maximum) at `w`.
+    #[inline]
+    fn g_at(&self, w: f64) -> f64 {
+        if self.on_fb {
+            if self.y >= w {
+                f64::INFINITY
+            } else {
+                f64::NEG_INFINITY
+            }
+        } else {
+            self.alpha - self.beta * w
+        }
+    }
+}
+
+/// A piece prepared for the dual ray space: its two bottom and two top vertices.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct DualPiece {
+    b: [Dual; 2],
+    t: [Dual; 2],
+}
+
+/// The planar problem of one shaft, in local coordinates: `xa = 0`, `xb = len`, `y`
+/// relative to the shaft's centre line.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Planar {
+    pub len: f64,
+    /// The two rectangles (`lo` ends at `x = 0`, `hi` starts at `x = len`).
+    pub lo: Rect,
+    pub hi: Rect,
+    /// `RS`: rays cross `F_A` at `u ∈ [u_lo, u_hi]`, `F_B` at `w ∈ [w_lo, w_hi]`.
+    pub u_lo: f64,
+    pub u_hi: f64,
+    pub w_lo: f64,
+    pub w_hi: f64,
+    pub pieces: Vec<Piece>,
+    pub duals: Vec<DualPiece>,
+    /// Coverage tolerance in `u` (metres): coverage must overlap by this much.
+    pub eps: f64,
+}
+
+impl Default for Rect {
+    fn default() -> Self {
+        Rect {
+            x0: 0.0,
+            x1: 0.0,
+            y0: 0.0,
+            y1: 0.0,
+        }
+    }
+}
+
+/// Per-query scratch memory, reused across tests of one cell.
+#[derive(Default)]
+pub(crate) struct Scratch {
+    pub planar: Planar,
+    pub stamp: Vec<u32>,
+    pub stamp_gen: u32,
+    pub cuts: Vec<f64>,
+    pub kept: Vec<(f64, f64)>,
+    pub intervals: Vec<(f64, f64)>,
+    pub bands: Vec<(f64, f64, u32)>,
+}
+
+/// The rectangle of a box in `axis`-local coordinates, translated by `-origin`.
+pub(crate) fn local_rect(b: &Aabb3, axis: Axis) -> Rect {
+    let (p, q) = (
+        axis.to_local(b.min.truncate()),
+        axis.to_local(b.max.truncate()),
+    );
+    Rect {
+        x0: p.x,
+        x1: q.x,
+        y0: p.y,
+        y1: q.y,
+    }
+}
+
+impl Planar {
+    /// Set up the shaft between `lo` (tops at `lo_top`) and `hi` (`lo.x1 < hi.x0`) and
+    /// gather the occluder pieces cut by the ceiling from `decomp`.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn build(
+        scratch: &mut Scratch,
+        decomp: &Decomposition,
+        lo: Rect,
+        lo_top: f64,
+        hi: Rect,
+        hi_top: f64,
+    ) {
+        let ceiling = Ceiling::new(&lo, lo_top, &hi, hi_top);
+        let xa = lo.x1;
+        let xb = hi.x0;
+        let yc = 0.5 * (lo.y0.min(hi.y0) + lo.y1.max(hi.y1));
+        let to_local = |r: &Rect| Rect {
+            x0: r.x0 - xa,
+            x1: r.x1 - xa,
+            y0: r.y0 - yc,
+            y1: r.y1 - yc,
+        };
+        let p = &mut scratch.planar;
+        p.len = xb - xa;
+        p.lo = to_local(&lo);
+        p.hi = to_local(&hi);
+        let (u_lo, u_hi, w_lo, w_hi) = hull_sections(&p.lo, &p.hi);
+        p.u_lo = u_lo;
+        p.u_hi = u_hi;
+        p.w_lo = w_lo;
+        p.w_hi = w_hi;
+        p.eps = 1e-9 * (1.0 + (u_hi - u_lo).max(w_hi - w_lo).max(p.len));
+        p.pieces.clear();
+        p.duals.clear();
+
+        // Walk the grid columns between the faces, rows within the shaft's hull.
+        let g = &decomp.grid;
+        if scratch.stamp.len() != decomp.slabs.len() {
+            scratch.stamp = vec![0; decomp.slabs.len()];
+            scratch.stamp_gen = 0;
+        }
+        scratch.stamp_gen = scratch.stamp_gen.wrapping_add(1);
+        if scratch.stamp_gen == 0 {
+            scratch.stamp.iter_mut().for_each(|s| *s = 0);
+            scratch.stamp_gen = 1;
+        }
+        let gen = scratch.stamp_gen;
+        let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
+        let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
+        let (c0, c1) = (g.col(xa), g.col(xb));
+        for c in c0..=c1 {
+            let cx0 = (g.origin.x + c as f64 * g.cell_m).max(xa);
+            let cx1 = (g.origin.x + (c + 1) as f64 * g.cell_m).min(xb);
+            let ylo = lower(cx0).min(lower(cx1));
+            let yhi = upper(cx0).max(upper(cx1));
+            let (r0, r1) = (g.row(ylo), g.row(yhi));
+            for r in r0..=r1 {
+                for &id in g.bucket(c, r) {
+                    let st = &mut scratch.stamp[id as usize];
+                    if *st == gen {
+                        continue;
+                    }
+                    *st = gen;
+                    let slab = &decomp.slabs[id as usize];
+                    let traps =
+                        &decomp.traps[slab.first as usize..(slab.first + slab.len) as usize];
+                    cut_slab(
+                        slab,
+                        traps,
+                        &ceiling,
+                        xa,
+                        xb,
+                        yc,
+                        &lower,
+                        &upper,
+                        &mut scratch.cuts,
+                        &mut scratch.kept,
+                        &mut p.pieces,
+                    );
+                }
+            }
+        }
+        let len = p.len;
+        p.duals.extend(p.pieces.iter().map(|q| DualPiece {
+            b: [Dual::new(q.x0, q.yb0, len), Dual::new(q.x1, q.yb1, len)],
+            t: [Dual::new(q.x0, q.yt0, len), Dual::new(q.x1, q.yt1, len)],
+        }));
+    }
+
+    /// The rays `u` blocked by piece `i` for every `w` of the band `[w0, w1]`:
+    /// `[H(w0), G(w1)]` (possibly empty: `lo > hi`).
+    #[inline]
+    pub(crate) fn piece_band(&self, i: usize, w0: f64, w1: f64) -> (f64, f64) {
+        let d = &self.duals[i];
+        let lo = d.b[0].h_at(w0).min(d.b[1].h_at(w0));
+        let hi = d.t[0].g_at(w1).max(d.t[1].g_at(w1));
+        (lo, hi)
+    }
+
+    /// Push the rays that miss `lo` or `hi` for every `w` of the band (they are not
+    /// rays between the boxes: §4's shaft contains only rays through both).
+    pub(crate) fn mask_band(&self, w0: f64, w1: f64, out: &mut Vec<(f64, f64)>) {
+        let inf = f64::INFINITY;
+        // lo box: the ray at x = lo.x0 is u - (w - u) * ka.
+        let ka = (0.0 - self.lo.x0) / self.len;
+        let below = (self.lo.y0 + ka * w0) / (1.0 + ka);
+        out.push((-inf, self.lo.y0.min(below)));
+        let above = (self.lo.y1 + ka * w1) / (1.0 + ka);
+        out.push((self.lo.y1.max(above), inf));
+        // hi box: the ray at x = hi.x1 is w + (w - u) * kb.
+        let kb = (self.hi.x1 - self.len) / self.len;
+        if w0 > self.hi.y1 {
+            if kb > 0.0 {
+                out.push((-inf, (w0 * (1.0 + kb) - self.hi.y1) / kb));
+            } else {
+                out.push((-inf, inf));
+            }
+        }
+        if w1 < self.hi.y0 {
+            if kb > 0.0 {
+                out.push(((w1 * (1.0 + kb) - self.hi.y0) / kb, inf));
+            } else {
+                out.push((-inf, inf));
+            }
+        }
+    }
+}
+
+/// The shaft's cross-sections at `x = 0` (`u`) and `x = len` (`w`): the convex hull of
+/// the two rectangles, bounded by the supporting planes `L` and `R`.
+fn hull_sections(lo: &Rect, hi: &Rect) -> (f64, f64, f64, f64) {
+    let len = hi.x0 - lo.x1;
+    // Upper boundary.
+    let (u_hi, w_hi) = if lo.y1 >= hi.y1 {
+        // From lo's near top corner to hi's far top corner.
+        let s = (hi.y1 - lo.y1) / (hi.x1 - lo.x1);
+        (lo.y1, lo.y1 + s * len)
+    } else {
+        let s = (hi.y1 - lo.y1) / (hi.x0 - lo.x0);
+        (lo.y1 + s * (lo.x1 - lo.x0), hi.y1)
+    };
+    let (u_lo, w_lo) = if lo.y0 <= hi.y0 {
+        let s = (hi.y0 - lo.y0) / (hi.x1 - lo.x1);
+        (lo.y0, lo.y0 + s * len)
+    } else {
+        let s = (hi.y0 - lo.y0) / (hi.x0 - lo.x0);
+        (lo.y0 + s * (lo.x1 - lo.x0), hi.y0)
+    };
+    (u_lo, u_hi, w_lo, w_hi)
+}
+
+/// Cut one slab by the ceiling, clip it to the shaft and fuse its touching trapezoids
+/// into convex pieces.
+#[allow(clippy::too_many_arguments)]
+fn cut_slab(
+    slab: &Slab,
+    traps: &[Trap],
+    ceiling: &Ceiling,
+    xa: f64,
+    xb: f64,
+    yc: f64,
+    lower: &impl Fn(f64) -> f64,
+    upper: &impl Fn(f64) -> f64,
+    cuts: &mut Vec<f64>,
+    kept: &mut Vec<(f64, f64)>,
+    out: &mut Vec<Piece>,
+) {
+    let cx0 = slab.x0.max(xa);
+    let cx1 = slab.x1.min(xb);
+    if cx1 <= cx0 {
+        return;
+    }
+    if slab.h_max <= ceiling.at(cx0).min(ceiling.at(cx1)) {
+        return;
+    }
+    let lo_line = lower(cx0).min(lower(cx1));
+    let hi_line = upper(cx0).max(upper(cx1));
+    if slab.y_max < lo_line || slab.y_min > hi_line {
+        return;
+    }
+    cuts.clear();
+    kept.clear();
+    cuts.push(cx0);
+    cuts.push(cx1);
+    for t in traps {
+        match ceiling.below(t.h, cx0, cx1) {
+            Some((k0, k1)) => {
+                kept.push((k0, k1));
+                if k0 > cx0 {
+                    cuts.push(k0);
+                }
+                if k1 < cx1 {
+                    cuts.push(k1);
+                }
+            }
+            None => kept.push((f64::INFINITY, f64::NEG_INFINITY)),
+        }
+    }
+    cuts.sort_by(f64::total_cmp);
+    cuts.dedup();
+    let span = slab.x1 - slab.x0;
+    let at = |line: &[f64; 2], x: f64| -> f64 {
+        if x <= slab.x0 {
+            line[0]
+        } else if x >= slab.x1 {
+            line[1]
+        } else {
+            line[0] + (line[1] - line[0]) * ((x - slab.x0) / span)
+        }
+    };
+    for w in cuts.windows(2) {
+        let (c, d) = (w[0], w[1]);
+        if d <= c {
+            continue;
+        }
+        let mut i = 0;
+        while i < traps.len() {
+            let (k0, k1) = kept[i];
+            if !(k0 <= c && k1 >= d) {
+                i += 1;
+                continue;
+            }
+            let first = i;
+            let mut last = i;
+            while last + 1 < traps.len()
+                && traps[last + 1].touches_prev
+                && kept[last + 1].0 <= c
+                && kept[last + 1].1 >= d
+            {
+                last += 1;
+            }
+            i = last + 1;
+            let (b, t) = (&traps[first].bot, &traps[last].top);
+            let piece = Piece {
+                x0: c - xa,
+                x1: d - xa,
+                yb0: at(b, c) - yc,
+                yb1: at(b, d) - yc,
+                yt0: at(t, c) - yc,
+                yt1: at(t, d) - yc,
+            };
+            // Entirely outside the shaft: no ray of RS meets it.
+            if piece.yb0 + yc > upper(c) && piece.yb1 + yc > upper(d) {
+                continue;
+            }
+            if piece.yt0 + yc < lower(c) && piece.yt1 + yc < lower(d) {
+                continue;
+            }
+            out.push(piece);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ceiling_supports_both_boxes() {
+        let lo = Rect {
+            x0: 0.0,
+            x1: 10.0,
+            y0: 0.0,
+            y1: 10.0,
+        };
+        let hi = Rect {
+            x0: 30.0,
+            x1: 40.0,
+            y0: 0.0,
+            y1: 10.0,
+        };
+        for (zl, zh) in [(2.0, 20.0), (20.0, 2.0), (5.0, 5.0), (2.0, 0.0)] {
+            let c = Ceiling::new(&lo, zl, &hi, zh);
+            for x in [0.0, 5.0, 10.0] {
+                assert!(c.at(x) >= zl - 1e-12, "{zl} {zh} at {x}");
+            }
+            for x in [30.0, 35.0, 40.0] {
+                assert!(c.at(x) >= zh - 1e-12, "{zl} {zh} at {x}");
+            }
+        }
+        // Rising: through lo's far edge and hi's near edge.
+        let c = Ceiling::new(&lo, 2.0, &hi, 20.0);
+        assert!((c.at(0.0) - 2.0).abs() < 1e-12 && (c.at(30.0) - 20.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn hull_sections_contain_both_faces() {
+        let lo = Rect {
+            x0: -10.0,
+            x1: 0.0,
+            y0: 0.0,
+            y1: 10.0,
+        };
+        let hi = Rect {
+            x0: 20.0,
+            x1: 30.0,
+            y0: 50.0,
+            y1: 60.0,
+        };
+        let (u_lo, u_hi, w_lo, w_hi) = hull_sections(&lo, &hi);
+        assert_eq!(u_lo, 0.0);
+        assert!(u_hi > 10.0); // the hull bulges above lo's face towards hi
+        assert!(w_lo < 50.0);
+        assert_eq!(w_hi, 60.0);
+    }
+}
