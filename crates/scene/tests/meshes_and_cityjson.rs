@@ -42,7 +42,13 @@ fn in_prisms(prisms: &[Prism], p: DVec3) -> bool {
 
 /// Outer contains every vertex; inner lies within outer (sampled on a grid).
 fn check_bounds(o: &Object) {
-    for v in vertices(o) {
+    // Blocks: outer is the geometry itself (vertices lie on its boundary).
+    let mesh_vertices = if o.kind() == ObjectKind::Mesh {
+        vertices(o)
+    } else {
+        vec![]
+    };
+    for v in mesh_vertices {
         let v = DVec3::new(v.x, v.y, v.z.max(0.0));
         assert!(
             in_prisms(&o.outer, v),

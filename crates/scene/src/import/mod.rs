@@ -12,6 +12,7 @@ pub mod gltf;
 pub mod height;
 pub mod mesh_bounds;
 pub mod obj;
+pub mod osm;
 pub mod project;
 pub mod validate;
 
@@ -79,6 +80,7 @@ pub fn load(path: &Path, opts: &ImportOptions) -> Result<Scene, ImportError> {
         }
         "zip" => cityjson::parse_zip(&read(path)?, opts),
         "obj" => obj::parse(&read(path)?),
+        "pbf" => osm::parse(&read(path)?, opts),
         "gltf" | "glb" => gltf::parse(&read(path)?, path.parent()),
         _ => Err(ImportError::Unsupported(path.display().to_string())),
     }
