@@ -69,7 +69,6 @@ pub fn parse(bytes: &[u8]) -> Result<Scene, ImportError> {
         single_index: true,
         ignore_points: true,
         ignore_lines: true,
-        ..Default::default()
     };
     let mut reader = std::io::BufReader::new(bytes);
     let (models, _) =
