@@ -115,3 +115,112 @@ fn generate_metropolis_small() {
     assert_eq!(v["features"].as_array().unwrap().len(), 500);
     assert!(String::from_utf8_lossy(&o.stdout).contains("500 objects"));
 }
+
+#[test]
+fn cells_on_a_generated_city() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("city.geojson");
+    let o = sightline(&["generate", "city", "--size", "60", "-o", path(&scene)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let cells = dir.path().join("cells.json");
+    let o = sightline(&[
+        "cells",
+        path(&scene),
+        "--size",
+        "40",
+        "--z",
+        "1.5:2",
+        "-o",
+        path(&cells),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: Vec<[f64; 6]> = serde_json::from_slice(&std::fs::read(&cells).unwrap()).unwrap();
+    assert!(!v.is_empty());
+    assert!(v
+        .iter()
+        .all(|c| c[3] - c[0] == 40.0 && c[2] == 1.5 && c[5] == 2.0));
+    assert!(String::from_utf8_lossy(&o.stdout).contains(&format!("{} cells", v.len())));
+
+    // Clipped to a small square around the first cell: only cells meeting it stay.
+    let clip = dir.path().join("clip.geojson");
+    let [x0, y0, _, x1, y1, _] = v[0];
+    let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+    let poly = serde_json::json!({"type": "Polygon", "coordinates": [[
+        [cx - 1.0, cy - 1.0], [cx + 1.0, cy - 1.0], [cx + 1.0, cy + 1.0], [cx - 1.0, cy + 1.0], [cx - 1.0, cy - 1.0]
+    ]]});
+    std::fs::write(&clip, poly.to_string()).unwrap();
+    let clipped = dir.path().join("clipped.json");
+    let o = sightline(&[
+        "cells",
+        path(&scene),
+        "--size",
+        "40",
+        "--clip",
+        path(&clip),
+        "-o",
+        path(&clipped),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let w: Vec<[f64; 6]> = serde_json::from_slice(&std::fs::read(&clipped).unwrap()).unwrap();
+    assert!(w.len() == 1 || w.is_empty(), "{w:?}");
+}
+
+#[test]
+fn cells_rejects_bad_arguments_with_one_line_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("city.geojson");
+    let o = sightline(&["generate", "city", "--size", "20", "-o", path(&scene)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = dir.path().join("cells.json");
+    let bad_clip = dir.path().join("clip.geojson");
+    std::fs::write(
+        &bad_clip,
+        "{\"type\": \"Polygon\", \"coordinates\": [[[0, 0], [1, 1]]]}",
+    )
+    .unwrap();
+    for args in [
+        vec!["cells", path(&scene), "--z", "2:1", "-o", path(&out)],
+        vec!["cells", path(&scene), "--z", "-1:2", "-o", path(&out)],
+        vec!["cells", path(&scene), "--z", "abc", "-o", path(&out)],
+        vec!["cells", path(&scene), "--z", "1:nan", "-o", path(&out)],
+        vec!["cells", path(&scene), "--size", "-3", "-o", path(&out)],
+        vec!["cells", path(&scene), "--size", "0", "-o", path(&out)],
+        vec!["cells", path(&scene), "--size", "0.0001", "-o", path(&out)],
+        vec![
+            "cells",
+            path(&scene),
+            "--clip",
+            path(&bad_clip),
+            "-o",
+            path(&out),
+        ],
+        vec!["cells", "missing.geojson", "-o", path(&out)],
+    ] {
+        let o = sightline(&args);
+        assert!(!o.status.success(), "{args:?} should fail");
+        let err = stderr(&o);
+        assert!(
+            err.starts_with("error:") && err.lines().count() == 1,
+            "{args:?}: {err}"
+        );
+    }
+    assert!(!out.exists(), "no output file on error");
+}
+
+#[test]
+fn demo_runs_end_to_end() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("demo");
+    let o = sightline(&["demo", "-o", path(&out), "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["city.geojson", "cells.json", "summary.md", "summary.json"] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
+    let v: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(
+        v["objects"].as_u64().unwrap() as usize,
+        v["methods"][8]["pvs_max"].as_u64().unwrap() as usize
+    );
+    assert_eq!(v["methods"].as_array().unwrap().len(), 9);
+}

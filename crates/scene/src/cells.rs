@@ -49,12 +49,20 @@ pub fn grid_shape(scene: &Scene, size_m: f64) -> (u64, u64) {
     if b.is_empty() || size_m.is_nan() || size_m <= 0.0 {
         return (0, 0);
     }
+    let o = grid_origin(b, size_m);
     let count = |extent: f64| ((extent / size_m).ceil() as u64).max(1);
-    (count(b.size().x), count(b.size().y))
+    (count(b.max.x - o.x), count(b.max.y - o.y))
+}
+
+/// The grid's minimum corner: the scene's minimum corner rounded down to a multiple of
+/// the cell size, so cells sit on round coordinates.
+fn grid_origin(b: Aabb2, size_m: f64) -> DVec2 {
+    (b.min / size_m).floor() * size_m
 }
 
 /// Cells of side `size_m` covering the scene's bounding rectangle (row by row from
-/// its minimum corner; the last row and column may stick out), at heights `z0..z1`,
+/// its minimum corner rounded down to a multiple of `size_m`; the first and last rows
+/// and columns may stick out), at heights `z0..z1`,
 /// keeping those whose free space is non-empty.
 pub fn grid_cells(
     scene: &Scene,
@@ -89,14 +97,15 @@ pub fn grid_cells_clipped(
     if total > MAX_CELLS {
         return Err(CellError::TooMany(total));
     }
+    let origin = grid_origin(b, size_m);
     let clip_bbox = clip.map(|c| c.iter().fold(Aabb2::EMPTY, |a, p| a.union(p.bbox())));
     let free = FreeSpace::new(scene);
     let cells: Vec<ViewCell> = (0..total)
         .into_par_iter()
         .filter_map(|k| {
             let (i, j) = ((k % nx) as f64, (k / nx) as f64);
-            let lo = b.min + DVec2::new(i, j) * size_m;
-            let hi = b.min + DVec2::new(i + 1.0, j + 1.0) * size_m;
+            let lo = origin + DVec2::new(i, j) * size_m;
+            let hi = origin + DVec2::new(i + 1.0, j + 1.0) * size_m;
             let cell = ViewCell::from_array([lo.x, lo.y, z0, hi.x, hi.y, z1]).ok()?;
             let keep = match (clip, clip_bbox) {
                 (Some(c), Some(cb)) => {

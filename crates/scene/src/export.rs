@@ -4,7 +4,7 @@
 //! The GeoJSON is what the importer reads back (SPEC §1): one feature per object, a
 //! `Polygon` (or `MultiPolygon` for several parts), properties `name`, `height` (= top),
 //! `min_height` (= base, only when > 0) and `"kind": "street"` for flat objects.
-//! Coordinates are projected metres, written with Rust's shortest round-trip float
+//! Coordinates are projected metres (marked by a top-level `local_frame` member), written with Rust's shortest round-trip float
 //! formatting, so shared vertices (party walls) stay bit-identical after a round trip.
 //!
 //! ```
@@ -70,7 +70,11 @@ fn write_polygon(w: &mut impl Write, p: &Polygon, index: usize) -> Result<(), Ex
 /// Write blocks and flat objects as a GeoJSON FeatureCollection. Meshes, and blocks
 /// whose parts have different heights (one feature carries one height), are errors.
 pub fn write_geojson(scene: &Scene, w: &mut impl Write) -> Result<(), ExportError> {
-    w.write_all(b"{\"type\":\"FeatureCollection\",\"features\":[\n")?;
+    // `local_frame` (a foreign member) tells the importer these are projected metres,
+    // even when a small scene's coordinates would fit in the lon/lat ranges.
+    w.write_all(
+        b"{\"type\":\"FeatureCollection\",\"local_frame\":{\"units\":\"m\"},\"features\":[\n",
+    )?;
     for (index, o) in scene.objects.iter().enumerate() {
         let (polys, props): (Vec<&Polygon>, String) = match &o.geometry {
             Geometry::Blocks(prisms) => {

@@ -235,3 +235,27 @@ fn obj_writer_writes_one_object_per_tree() {
         .unwrap();
     assert_eq!(max_index, 3 * 48);
 }
+
+#[test]
+fn geojson_round_trips_through_the_importer() {
+    use sightline_scene::import::{geojson, ImportOptions};
+    // A tiny city fits in the lon/lat ranges: the local frame marker keeps it metric.
+    for s in [
+        generate::city(1, 3),
+        generate::city(2, 120),
+        generate::metropolis(1, 200),
+    ] {
+        let mut out = Vec::new();
+        export::write_geojson(&s, &mut out).unwrap();
+        let back = geojson::parse(&out, &ImportOptions::default()).unwrap();
+        assert_eq!(back.objects.len(), s.objects.len());
+        assert_eq!(
+            back.fingerprint(),
+            s.fingerprint(),
+            "geometry changed in the round trip"
+        );
+        assert_eq!(shared_edges(&back), shared_edges(&s));
+        let names = |s: &Scene| s.objects.iter().map(|o| o.name.clone()).collect::<Vec<_>>();
+        assert_eq!(names(&back), names(&s));
+    }
+}
