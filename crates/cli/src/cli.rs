@@ -65,9 +65,13 @@ pub enum Command {
         kind: GenerateKind,
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// Size: number of buildings (city, metropolis) or trees (forest).
+        /// Size: number of buildings (city 500, metropolis 150000) or trees (forest 500).
         #[arg(long)]
         size: Option<usize>,
+        /// forest: leaf quads per tree (default 200).
+        #[arg(long)]
+        leaves: Option<usize>,
+        /// Output: .geojson/.json (city, metropolis) or .obj (any kind; forest needs .obj).
         #[arg(short, long)]
         out: PathBuf,
     },
@@ -83,10 +87,10 @@ pub enum Command {
         #[command(flatten)]
         scene: SceneArg,
         /// Cell side in metres.
-        #[arg(long, default_value_t = 50.0)]
+        #[arg(long, default_value_t = 50.0, allow_hyphen_values = true)]
         size: f64,
         /// Eye-height range, `Z0:Z1`.
-        #[arg(long, default_value = "1.5:2.0")]
+        #[arg(long, default_value = "1.5:2.0", allow_hyphen_values = true)]
         z: String,
         /// Keep only cells meeting this GeoJSON polygon (e.g. the streets).
         #[arg(long)]

@@ -14,4 +14,8 @@
 pub mod model;
 
 pub use model::{Geometry, Mesh, Object, ObjectKind, Prism, Scene, Warning};
+pub mod cells;
+pub mod export;
+pub mod generate;
 pub mod import;
+pub mod index;

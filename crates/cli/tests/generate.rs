@@ -1,0 +1,226 @@
+//! `sightline generate` end to end through the binary.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn sightline(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sightline"))
+        .args(args)
+        .output()
+        .expect("run sightline")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn path(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn generate_city_writes_geojson_deterministically() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.geojson"), dir.path().join("b.geojson"));
+    for f in [&a, &b] {
+        let o = sightline(&[
+            "generate",
+            "city",
+            "--seed",
+            "3",
+            "--size",
+            "40",
+            "-o",
+            path(f),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let bytes = std::fs::read(&a).unwrap();
+    assert_eq!(bytes, std::fs::read(&b).unwrap(), "same seed, same bytes");
+    let v: serde_json::Value = serde_json::from_slice(&bytes).unwrap();
+    let features = v["features"].as_array().unwrap();
+    let buildings = features
+        .iter()
+        .filter(|f| f["properties"].get("height").is_some())
+        .count();
+    assert_eq!(buildings, 40);
+    assert!(features.iter().any(|f| f["properties"]["kind"] == "street"));
+}
+
+#[test]
+fn generate_forest_writes_obj_and_refuses_geojson() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("forest.obj");
+    let o = sightline(&[
+        "generate",
+        "forest",
+        "--size",
+        "5",
+        "--leaves",
+        "20",
+        "-o",
+        path(&obj),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&obj).unwrap();
+    assert_eq!(text.lines().filter(|l| l.starts_with("o ")).count(), 5);
+    assert_eq!(
+        text.lines().filter(|l| l.starts_with("f ")).count(),
+        5 * (12 + 40)
+    );
+
+    let gj = dir.path().join("forest.geojson");
+    let o = sightline(&["generate", "forest", "-o", path(&gj)]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.starts_with("error:") && err.contains(".obj"), "{err}");
+    assert_eq!(err.lines().count(), 1);
+    assert!(!gj.exists(), "no file on error");
+}
+
+#[test]
+fn generate_rejects_bad_sizes_and_formats() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.geojson");
+    for args in [
+        vec!["generate", "city", "--size", "0", "-o", path(&out)],
+        vec![
+            "generate",
+            "metropolis",
+            "--size",
+            "99999999999",
+            "-o",
+            path(&out),
+        ],
+        vec![
+            "generate", "forest", "--size", "1000", "--leaves", "100000", "-o", "f.obj",
+        ],
+        vec!["generate", "city", "-o", "city.txt"],
+        vec!["generate", "city", "--leaves", "3", "-o", path(&out)],
+    ] {
+        let o = sightline(&args);
+        assert!(!o.status.success(), "{args:?} should fail");
+        assert!(stderr(&o).starts_with("error:"), "{args:?}: {}", stderr(&o));
+    }
+    assert!(!out.exists());
+}
+
+#[test]
+fn generate_metropolis_small() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("m.geojson");
+    let o = sightline(&["generate", "metropolis", "--size", "500", "-o", path(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    assert_eq!(v["features"].as_array().unwrap().len(), 500);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("500 objects"));
+}
+
+#[test]
+fn cells_on_a_generated_city() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("city.geojson");
+    let o = sightline(&["generate", "city", "--size", "60", "-o", path(&scene)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let cells = dir.path().join("cells.json");
+    let o = sightline(&[
+        "cells",
+        path(&scene),
+        "--size",
+        "40",
+        "--z",
+        "1.5:2",
+        "-o",
+        path(&cells),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: Vec<[f64; 6]> = serde_json::from_slice(&std::fs::read(&cells).unwrap()).unwrap();
+    assert!(!v.is_empty());
+    assert!(v
+        .iter()
+        .all(|c| c[3] - c[0] == 40.0 && c[2] == 1.5 && c[5] == 2.0));
+    assert!(String::from_utf8_lossy(&o.stdout).contains(&format!("{} cells", v.len())));
+
+    // Clipped to a small square around the first cell: only cells meeting it stay.
+    let clip = dir.path().join("clip.geojson");
+    let [x0, y0, _, x1, y1, _] = v[0];
+    let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+    let poly = serde_json::json!({"type": "Polygon", "coordinates": [[
+        [cx - 1.0, cy - 1.0], [cx + 1.0, cy - 1.0], [cx + 1.0, cy + 1.0], [cx - 1.0, cy + 1.0], [cx - 1.0, cy - 1.0]
+    ]]});
+    std::fs::write(&clip, poly.to_string()).unwrap();
+    let clipped = dir.path().join("clipped.json");
+    let o = sightline(&[
+        "cells",
+        path(&scene),
+        "--size",
+        "40",
+        "--clip",
+        path(&clip),
+        "-o",
+        path(&clipped),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let w: Vec<[f64; 6]> = serde_json::from_slice(&std::fs::read(&clipped).unwrap()).unwrap();
+    assert!(w.len() == 1 || w.is_empty(), "{w:?}");
+}
+
+#[test]
+fn cells_rejects_bad_arguments_with_one_line_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("city.geojson");
+    let o = sightline(&["generate", "city", "--size", "20", "-o", path(&scene)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = dir.path().join("cells.json");
+    let bad_clip = dir.path().join("clip.geojson");
+    std::fs::write(
+        &bad_clip,
+        "{\"type\": \"Polygon\", \"coordinates\": [[[0, 0], [1, 1]]]}",
+    )
+    .unwrap();
+    for args in [
+        vec!["cells", path(&scene), "--z", "2:1", "-o", path(&out)],
+        vec!["cells", path(&scene), "--z", "-1:2", "-o", path(&out)],
+        vec!["cells", path(&scene), "--z", "abc", "-o", path(&out)],
+        vec!["cells", path(&scene), "--z", "1:nan", "-o", path(&out)],
+        vec!["cells", path(&scene), "--size", "-3", "-o", path(&out)],
+        vec!["cells", path(&scene), "--size", "0", "-o", path(&out)],
+        vec!["cells", path(&scene), "--size", "0.0001", "-o", path(&out)],
+        vec![
+            "cells",
+            path(&scene),
+            "--clip",
+            path(&bad_clip),
+            "-o",
+            path(&out),
+        ],
+        vec!["cells", "missing.geojson", "-o", path(&out)],
+    ] {
+        let o = sightline(&args);
+        assert!(!o.status.success(), "{args:?} should fail");
+        let err = stderr(&o);
+        assert!(
+            err.starts_with("error:") && err.lines().count() == 1,
+            "{args:?}: {err}"
+        );
+    }
+    assert!(!out.exists(), "no output file on error");
+}
+
+#[test]
+fn demo_runs_end_to_end() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("demo");
+    let o = sightline(&["demo", "-o", path(&out), "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["city.geojson", "cells.json", "summary.md", "summary.json"] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
+    let v: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(
+        v["objects"].as_u64().unwrap() as usize,
+        v["methods"][8]["pvs_max"].as_u64().unwrap() as usize
+    );
+    assert_eq!(v["methods"].as_array().unwrap().len(), 9);
+}

@@ -1,0 +1,132 @@
+//! `forest`: trees as meshes on open ground — the occlusion-sweep scene of the
+//! extended-projection paper (Durand et al. 2000, §7.2: 7,750 trees × 1,000 leaves).
+//!
+//! Each tree is one mesh object: a closed trunk box and `leaves_per_tree` small leaf
+//! quads (two triangles each) scattered with random orientations in an ellipsoidal
+//! crown. No single leaf occludes much; only their aggregation does — which is what
+//! the occlusion sweep is for.
+//!
+//! Bounds (SPEC §1): the *inner* bound is the trunk prism (the only solid part; leaves
+//! are not solid); the *outer* bound is two prisms, the trunk prism and the crown's
+//! bounding prism (tighter than one prism over both, and still containing every
+//! triangle).
+
+use super::{snap_mm, Rng};
+use crate::{Mesh, Object, Prism, Scene};
+use rayon::prelude::*;
+use sightline_geom::{Aabb2, DVec2, DVec3, Polygon};
+
+/// Parameters of [`forest_with`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct ForestParams {
+    pub trees: usize,
+    pub leaves_per_tree: usize,
+    /// Mean distance between neighbouring trees, in metres.
+    pub spacing_m: f64,
+}
+
+impl Default for ForestParams {
+    fn default() -> Self {
+        ForestParams {
+            trees: 500,
+            leaves_per_tree: 200,
+            spacing_m: 7.0,
+        }
+    }
+}
+
+/// A forest of `n_trees` trees with the default 200 leaves each.
+pub fn forest(seed: u64, n_trees: usize) -> Scene {
+    forest_with(
+        seed,
+        &ForestParams {
+            trees: n_trees,
+            ..ForestParams::default()
+        },
+    )
+}
+
+/// A forest with explicit parameters.
+pub fn forest_with(seed: u64, p: &ForestParams) -> Scene {
+    let g = ((p.trees as f64).sqrt().ceil() as usize).max(1);
+    let objects: Vec<Object> = (0..p.trees)
+        .into_par_iter()
+        .map(|k| {
+            let mut r = Rng::derive(seed, k as u64);
+            let jitter = DVec2::new(r.range(-0.3, 0.3), r.range(-0.3, 0.3));
+            let pos = (DVec2::new((k % g) as f64, (k / g) as f64) + jitter) * p.spacing_m;
+            tree(&mut r, pos, p.leaves_per_tree, format!("tree-{k}"))
+        })
+        .collect();
+    Scene::from_objects(objects)
+}
+
+fn tree(r: &mut Rng, pos: DVec2, leaves: usize, name: String) -> Object {
+    let trunk_h = r.range(2.5, 4.0);
+    let trunk_r = r.range(0.15, 0.3);
+    let crown_r = r.range(1.8, 3.2);
+    let crown_rz = crown_r * r.range(0.9, 1.3);
+    let crown_c = pos.extend(trunk_h + 0.8 * crown_rz);
+
+    let mut mesh = Mesh {
+        vertices: Vec::with_capacity(8 + 4 * leaves),
+        triangles: Vec::with_capacity(12 + 2 * leaves),
+    };
+    // Trunk: a closed box, counter-clockwise faces seen from outside.
+    let (lo, hi) = (pos - DVec2::splat(trunk_r), pos + DVec2::splat(trunk_r));
+    let foot = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
+    for z in [0.0, trunk_h] {
+        mesh.vertices.extend(foot.iter().map(|v| v.extend(z)));
+    }
+    for k in 0..4u32 {
+        let (a, b) = (k, (k + 1) % 4);
+        mesh.triangles.push([a, b, b + 4]);
+        mesh.triangles.push([a, b + 4, a + 4]);
+    }
+    mesh.triangles
+        .extend([[4, 5, 6], [4, 6, 7], [0, 2, 1], [0, 3, 2]]);
+
+    // Leaves: small quads, centres uniform in the crown ellipsoid, random orientation.
+    for _ in 0..leaves {
+        let c = loop {
+            let q = DVec3::new(r.range(-1.0, 1.0), r.range(-1.0, 1.0), r.range(-1.0, 1.0));
+            if q.length_squared() <= 1.0 {
+                break crown_c + q * DVec3::new(crown_r, crown_r, crown_rz);
+            }
+        };
+        let n = loop {
+            let q = DVec3::new(r.normal(), r.normal(), r.normal());
+            if q.length_squared() > 1e-6 {
+                break q.normalize();
+            }
+        };
+        let t1 = n.any_orthonormal_vector();
+        let t2 = n.cross(t1);
+        let half = 0.5 * r.range(0.15, 0.35);
+        let base = mesh.vertices.len() as u32;
+        mesh.vertices.extend([
+            c - (t1 + t2) * half,
+            c + (t1 - t2) * half,
+            c + (t1 + t2) * half,
+            c - (t1 - t2) * half,
+        ]);
+        mesh.triangles.push([base, base + 1, base + 2]);
+        mesh.triangles.push([base, base + 2, base + 3]);
+    }
+
+    for v in &mut mesh.vertices {
+        *v = DVec3::new(snap_mm(v.x), snap_mm(v.y), snap_mm(v.z));
+    }
+    let foot = foot.map(|v| DVec2::new(snap_mm(v.x), snap_mm(v.y)));
+    let trunk_h = snap_mm(trunk_h);
+    let trunk = Prism::new(Polygon::new(foot.to_vec(), vec![]), 0.0, trunk_h);
+    let mut outer = vec![trunk.clone()];
+    if leaves > 0 {
+        let crown = &mesh.vertices[8..];
+        let bb = Aabb2::from_points(&crown.iter().map(|v| v.truncate()).collect::<Vec<_>>());
+        let zmin = crown.iter().map(|v| v.z).fold(f64::INFINITY, f64::min);
+        let zmax = crown.iter().map(|v| v.z).fold(f64::NEG_INFINITY, f64::max);
+        outer.push(Prism::new(Polygon::rect(bb.min, bb.max), zmin, zmax));
+    }
+    Object::mesh(Some(name), mesh, vec![trunk], outer)
+}
