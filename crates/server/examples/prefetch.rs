@@ -112,13 +112,17 @@ impl Sim<'_> {
                 .filter(|(_, (_, at))| *at <= free.max(0.0) || *at <= until)
                 .map(|(k, v)| (*k, *v))
                 .next();
-            let Some((key, (cell, at))) = pick else { return };
+            let Some((key, (cell, at))) = pick else {
+                return;
+            };
             let start = free.max(at);
             if start > until {
                 return;
             }
             self.queued.remove(&key);
-            let Some(bx) = self.grid.cell(cell) else { continue };
+            let Some(bx) = self.grid.cell(cell) else {
+                continue;
+            };
             let t0 = Instant::now();
             let n = self.method.pvs(&bx).map(|v| v.len()).unwrap_or(0);
             let dt = t0.elapsed().as_secs_f64();
@@ -146,7 +150,11 @@ fn main() {
             std::process::exit(1);
         }
     };
-    eprintln!("loaded {} objects in {:.1} s", scene.len(), t_load.elapsed().as_secs_f64());
+    eprintln!(
+        "loaded {} objects in {:.1} s",
+        scene.len(),
+        t_load.elapsed().as_secs_f64()
+    );
     let t_prep = Instant::now();
     let method = match sightline_methods::create(&a.method, scene.clone(), &Default::default()) {
         Ok(m) => m,
@@ -155,7 +163,11 @@ fn main() {
             std::process::exit(1);
         }
     };
-    eprintln!("prepared {} in {:.1} s", a.method, t_prep.elapsed().as_secs_f64());
+    eprintln!(
+        "prepared {} in {:.1} s",
+        a.method,
+        t_prep.elapsed().as_secs_f64()
+    );
     let grid = match CellGrid::cover(&scene.bounds, a.cell_size) {
         Ok(g) => g,
         Err(e) => {

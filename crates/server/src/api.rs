@@ -133,9 +133,7 @@ pub fn parse_ids(s: &str, objects: usize, max: usize) -> Result<Vec<u32>, String
             .parse()
             .map_err(|_| format!("'{p}' is not an object id"))?;
         if id as usize >= objects {
-            return Err(format!(
-                "no object {id} (the scene has {objects} objects)"
-            ));
+            return Err(format!("no object {id} (the scene has {objects} objects)"));
         }
         ids.push(id);
     }
@@ -160,11 +158,7 @@ async fn objects(State(s): State<Arc<AppState>>, RawQuery(q): RawQuery) -> Respo
     s.counters
         .bytes_sent
         .fetch_add(bytes.len() as u64, Ordering::Relaxed);
-    (
-        [(header::CONTENT_TYPE, "application/octet-stream")],
-        bytes,
-    )
-        .into_response()
+    ([(header::CONTENT_TYPE, "application/octet-stream")], bytes).into_response()
 }
 
 /// `GET /api/boxes`: `SLB1` bounds of all objects (the mini-map).

@@ -498,7 +498,11 @@ mod tests {
         c.get(1, Priority::Demand).await.unwrap();
         assert_eq!(src.calls.load(Ordering::SeqCst), before, "1 still cached");
         c.get(2, Priority::Demand).await.unwrap();
-        assert_eq!(src.calls.load(Ordering::SeqCst), before + 1, "2 was evicted");
+        assert_eq!(
+            src.calls.load(Ordering::SeqCst),
+            before + 1,
+            "2 was evicted"
+        );
     }
 
     #[tokio::test]

@@ -135,15 +135,7 @@ impl CellGrid {
         let s = self.cell_size_m;
         let x0 = self.origin[0] + ix as f64 * s;
         let y0 = self.origin[1] + iy as f64 * s;
-        ViewCell::from_array([
-            x0,
-            y0,
-            self.z_range_m[0],
-            x0 + s,
-            y0 + s,
-            self.z_range_m[1],
-        ])
-        .ok()
+        ViewCell::from_array([x0, y0, self.z_range_m[0], x0 + s, y0 + s, self.z_range_m[1]]).ok()
     }
 
     /// The (up to) 8 cells adjacent to `id`, ordered so that those lying ahead along
@@ -204,7 +196,10 @@ mod tests {
         let g = grid();
         assert_eq!((g.nx, g.ny), (3, 2));
         assert_eq!(g.top_m, 30.0);
-        assert_eq!(g.cell(4).unwrap().to_array(), [50.0, 100.0, 1.5, 150.0, 200.0, 2.0]);
+        assert_eq!(
+            g.cell(4).unwrap().to_array(),
+            [50.0, 100.0, 1.5, 150.0, 200.0, 2.0]
+        );
         assert!(g.cell(6).is_none());
     }
 
@@ -249,9 +244,21 @@ mod tests {
     #[test]
     fn rejects_bad_sizes() {
         let b = Aabb3::new(DVec3::ZERO, DVec3::new(10.0, 10.0, 10.0));
-        assert!(matches!(CellGrid::cover(&b, 0.0), Err(GridError::BadSize(_))));
-        assert!(matches!(CellGrid::cover(&b, f64::NAN), Err(GridError::BadSize(_))));
-        assert!(matches!(CellGrid::cover(&b, 1e-9), Err(GridError::TooMany(..))));
-        assert_eq!(CellGrid::cover(&Aabb3::EMPTY, 1.0), Err(GridError::EmptyScene));
+        assert!(matches!(
+            CellGrid::cover(&b, 0.0),
+            Err(GridError::BadSize(_))
+        ));
+        assert!(matches!(
+            CellGrid::cover(&b, f64::NAN),
+            Err(GridError::BadSize(_))
+        ));
+        assert!(matches!(
+            CellGrid::cover(&b, 1e-9),
+            Err(GridError::TooMany(..))
+        ));
+        assert_eq!(
+            CellGrid::cover(&Aabb3::EMPTY, 1.0),
+            Err(GridError::EmptyScene)
+        );
     }
 }

@@ -18,7 +18,7 @@
 //! keeps sending them (more than [`crate::ServerConfig::max_session_errors`]) is
 //! disconnected. Messages are rate-limited per session.
 
-use crate::cache::{CacheError, Pvs, Priority};
+use crate::cache::{CacheError, Priority, Pvs};
 use crate::grid::CellId;
 use crate::limits::{json_error, TokenBucket};
 use crate::AppState;
@@ -313,7 +313,10 @@ impl Session {
             if !first {
                 self.s.counters.cell_changes.fetch_add(1, Ordering::Relaxed);
                 if self.held.contains_key(&cell) {
-                    self.s.counters.prefetch_hits.fetch_add(1, Ordering::Relaxed);
+                    self.s
+                        .counters
+                        .prefetch_hits
+                        .fetch_add(1, Ordering::Relaxed);
                 }
             }
             if self.held.contains_key(&cell) {
@@ -506,7 +509,9 @@ mod tests {
         assert!(matches!(m, ClientMsg::Pos { seq: None, .. }));
         assert!(serde_json::from_str::<ClientMsg>(r#"{"type":"pos","x":1}"#).is_err());
         assert!(serde_json::from_str::<ClientMsg>(r#"{"type":"fly"}"#).is_err());
-        assert!(serde_json::from_str::<ClientMsg>(r#"{"type":"pos","x":1,"y":2,"z":3,"w":4}"#).is_err());
+        assert!(
+            serde_json::from_str::<ClientMsg>(r#"{"type":"pos","x":1,"y":2,"z":3,"w":4}"#).is_err()
+        );
         let h: ClientMsg = serde_json::from_str(r#"{"type":"hello"}"#).unwrap();
         assert!(matches!(h, ClientMsg::Hello { geometry: true }));
     }

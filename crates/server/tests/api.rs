@@ -115,9 +115,11 @@ async fn token_is_required_when_set() {
     assert_eq!(st, 200);
     // The viewer itself needs no token; the walk does.
     assert_eq!(http_get(s.addr, "/").await.0, 200);
-    assert!(tokio_tungstenite::connect_async(format!("ws://{}/api/walk", s.addr))
-        .await
-        .is_err());
+    assert!(
+        tokio_tungstenite::connect_async(format!("ws://{}/api/walk", s.addr))
+            .await
+            .is_err()
+    );
     let mut ws = ws_connect(s.addr, "?token=s3cret").await;
     let w = ws_next(&mut ws).await.unwrap().unwrap();
     assert_eq!(w["type"], "welcome");
@@ -170,7 +172,11 @@ async fn walk_prefetches_neighbours_and_sends_deltas() {
     // Start in cell (1,1) of the 6 × 6 grid of 50 m cells.
     let y = 75.0;
     let mut x = 70.0;
-    ws_send(&mut ws, json!({"type": "pos", "x": x, "y": y, "z": 1.7, "seq": 0})).await;
+    ws_send(
+        &mut ws,
+        json!({"type": "pos", "x": x, "y": y, "z": 1.7, "seq": 0}),
+    )
+    .await;
     let grid = CellGrid::cover(&s.state.scene.bounds, 50.0).unwrap();
     let start = grid.locate(sightline_geom::DVec3::new(x, y, 1.7)).unwrap();
     let mut want: std::collections::BTreeSet<u32> = grid
@@ -183,7 +189,10 @@ async fn walk_prefetches_neighbours_and_sends_deltas() {
         if let Ok(v) = &m {
             if v["type"] == "cell" {
                 for id in v["added"].as_array().unwrap() {
-                    assert!(c.geometry.contains(&(id.as_u64().unwrap() as u32)), "geometry first");
+                    assert!(
+                        c.geometry.contains(&(id.as_u64().unwrap() as u32)),
+                        "geometry first"
+                    );
                 }
             }
         }
@@ -194,7 +203,11 @@ async fn walk_prefetches_neighbours_and_sends_deltas() {
     let mut entered = 0;
     while x < 240.0 {
         x += 10.0;
-        ws_send(&mut ws, json!({"type": "pos", "x": x, "y": y, "z": 1.7, "seq": seq})).await;
+        ws_send(
+            &mut ws,
+            json!({"type": "pos", "x": x, "y": y, "z": 1.7, "seq": seq}),
+        )
+        .await;
         // Read until the ack of this position.
         let ack = loop {
             let m = ws_next(&mut ws).await.expect("open");
@@ -207,11 +220,15 @@ async fn walk_prefetches_neighbours_and_sends_deltas() {
         };
         seq += 1;
         let cell = ack["cell"].as_u64().unwrap() as u32;
-        assert_eq!(ack["held"], true, "cell {cell} prefetched before entering it");
+        assert_eq!(
+            ack["held"], true,
+            "cell {cell} prefetched before entering it"
+        );
         let held = c.cells.get(&cell).expect("client holds the PVS");
         let (_, _, body) = http_get(s.addr, &format!("/api/pvs?at={x},{y},1.7")).await;
         let v: serde_json::Value = serde_json::from_slice(&body).unwrap();
-        let truth: std::collections::BTreeSet<u32> = serde_json::from_value(v["visible"].clone()).unwrap();
+        let truth: std::collections::BTreeSet<u32> =
+            serde_json::from_value(v["visible"].clone()).unwrap();
         assert_eq!(held, &truth, "cell {cell}");
         assert!(truth.iter().all(|id| c.geometry.contains(id)));
         if x as u32 % 50 == 0 {
@@ -219,7 +236,9 @@ async fn walk_prefetches_neighbours_and_sends_deltas() {
         }
         // Give the prefetch of the next cells time, as walking does.
         tokio::time::sleep(std::time::Duration::from_millis(20)).await;
-        while let Ok(Some(m)) = tokio::time::timeout(std::time::Duration::from_millis(30), ws_next(&mut ws)).await {
+        while let Ok(Some(m)) =
+            tokio::time::timeout(std::time::Duration::from_millis(30), ws_next(&mut ws)).await
+        {
             c.apply(&m);
         }
     }
@@ -257,7 +276,11 @@ async fn malformed_messages_get_error_frames_and_never_crash() {
         assert_eq!(e["type"], "error", "{e}");
     }
     // Still answering.
-    ws_send(&mut ws, json!({"type": "pos", "x": 5.0, "y": 5.0, "z": 1.7, "seq": 1})).await;
+    ws_send(
+        &mut ws,
+        json!({"type": "pos", "x": 5.0, "y": 5.0, "z": 1.7, "seq": 1}),
+    )
+    .await;
     loop {
         let m = ws_next(&mut ws).await.unwrap();
         if let Ok(v) = m {

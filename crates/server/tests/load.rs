@@ -21,7 +21,10 @@ use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::Message;
 
 fn env<T: std::str::FromStr>(k: &str, d: T) -> T {
-    std::env::var(k).ok().and_then(|v| v.parse().ok()).unwrap_or(d)
+    std::env::var(k)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(d)
 }
 
 #[derive(Default, Debug)]
@@ -127,7 +130,8 @@ async fn client(
             Message::Close(_) => break,
             _ => continue,
         };
-        let applied = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| state.apply(&parsed)));
+        let applied =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| state.apply(&parsed)));
         let t = match applied {
             Ok(t) => t,
             Err(_) => {
@@ -138,7 +142,10 @@ async fn client(
         if t == "ack" {
             let v = parsed.as_ref().ok().cloned().unwrap_or_default();
             rep.acks += 1;
-            if let Some(at) = v["seq"].as_u64().and_then(|s| sent.lock().unwrap().remove(&s)) {
+            if let Some(at) = v["seq"]
+                .as_u64()
+                .and_then(|s| sent.lock().unwrap().remove(&s))
+            {
                 rep.latencies_us.push(at.elapsed().as_micros() as u64);
             }
             let c = v["cell"].as_u64();
@@ -186,9 +193,17 @@ async fn concurrent_walkers_on_loopback() {
         reps.push(t.await.unwrap());
     }
     let wall = t0.elapsed().as_secs_f64();
-    let mut lat: Vec<u64> = reps.iter().flat_map(|r| r.latencies_us.iter().copied()).collect();
+    let mut lat: Vec<u64> = reps
+        .iter()
+        .flat_map(|r| r.latencies_us.iter().copied())
+        .collect();
     lat.sort_unstable();
-    let q = |p: f64| lat.get(((lat.len() as f64 - 1.0) * p).round() as usize).copied().unwrap_or(0) as f64 / 1000.0;
+    let q = |p: f64| {
+        lat.get(((lat.len() as f64 - 1.0) * p).round() as usize)
+            .copied()
+            .unwrap_or(0) as f64
+            / 1000.0
+    };
     let errors: Vec<&String> = reps.iter().flat_map(|r| &r.errors).collect();
     let changes: u64 = reps.iter().map(|r| r.cell_changes).sum();
     let in_hand: u64 = reps.iter().map(|r| r.in_hand).sum();

@@ -94,7 +94,11 @@ pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
             scene.len(),
             info.method,
             info.kind,
-            if info.conservative { ", conservative" } else { ", NOT conservative" },
+            if info.conservative {
+                ", conservative"
+            } else {
+                ", NOT conservative"
+            },
         );
         std::io::stdout().flush().ok();
         server.run(listener, shutdown_signal()).await?;

@@ -136,7 +136,11 @@ impl TestServer {
 
 /// A raw HTTP/1.1 GET on loopback (no HTTP client crate needed): (status, headers, body).
 pub async fn http_get(addr: SocketAddr, path_and_query: &str) -> (u16, String, Vec<u8>) {
-    http_request(addr, &format!("GET {path_and_query} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n")).await
+    http_request(
+        addr,
+        &format!("GET {path_and_query} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n"),
+    )
+    .await
 }
 
 pub async fn http_request(addr: SocketAddr, raw: &str) -> (u16, String, Vec<u8>) {
@@ -152,7 +156,10 @@ pub async fn http_request(addr: SocketAddr, raw: &str) -> (u16, String, Vec<u8>)
     let head = String::from_utf8_lossy(&buf[..split]).to_string();
     let mut body = buf[split + 4..].to_vec();
     let status: u16 = head.split_whitespace().nth(1).unwrap().parse().unwrap();
-    if head.to_ascii_lowercase().contains("transfer-encoding: chunked") {
+    if head
+        .to_ascii_lowercase()
+        .contains("transfer-encoding: chunked")
+    {
         body = dechunk(&body);
     }
     (status, head, body)
@@ -173,7 +180,8 @@ fn dechunk(mut b: &[u8]) -> Vec<u8> {
     }
 }
 
-pub type Ws = tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
+pub type Ws =
+    tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
 
 pub async fn ws_connect(addr: SocketAddr, query: &str) -> Ws {
     let (ws, _) = tokio_tungstenite::connect_async(format!("ws://{addr}/api/walk{query}"))
