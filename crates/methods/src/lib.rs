@@ -19,6 +19,7 @@
 //! assert_eq!(all.pvs(&cell).unwrap(), vec![0]);
 //! ```
 
+pub mod check;
 pub mod dual_ray;
 pub mod erosion;
 pub mod ext_proj;
