@@ -61,7 +61,7 @@ pub(crate) fn covers(iv: &mut [(f64, f64)], a: f64, b: f64, eps: f64) -> bool {
 pub(crate) fn hidden(scratch: &mut Scratch, resolution: u32) -> bool {
     let p = &scratch.planar;
     let (w_lo, w_hi) = (p.w_lo, p.w_hi);
-    if !(w_hi >= w_lo) {
+    if w_hi.is_nan() || w_lo.is_nan() || w_hi < w_lo {
         return false;
     }
     let first = FIRST_LEVEL.min(resolution.max(1));

@@ -32,7 +32,7 @@ const MAX_CANDIDATES: usize = 4;
 pub(crate) fn hidden(scratch: &mut Scratch) -> bool {
     let p = &scratch.planar;
     let (w_lo, w_hi) = (p.w_lo, p.w_hi);
-    if !(w_hi >= w_lo) {
+    if w_hi.is_nan() || w_lo.is_nan() || w_hi < w_lo {
         return false;
     }
     let bands = &mut scratch.bands;
