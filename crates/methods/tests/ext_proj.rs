@@ -30,7 +30,10 @@ fn pvs(scene: &Arc<Scene>, c: &ViewCell, params: Params) -> Vec<u32> {
 fn assert_conservative(scene: &Arc<Scene>, c: &ViewCell, p: &[u32]) {
     let vs = sampled_visible(scene, c, 3, 4);
     let m = missed(&vs, p);
-    assert!(m.is_empty(), "missed {m:?} (pvs {p:?}, sampled {vs:?}) from {c}");
+    assert!(
+        m.is_empty(),
+        "missed {m:?} (pvs {p:?}, sampled {vs:?}) from {c}"
+    );
 }
 
 /// Wall 40 m wide and 10 m high at x = 20..21; a low building hides behind it, a
@@ -50,7 +53,10 @@ fn wall_hides_the_low_building_but_not_the_tower() {
     let c = cell("0,-2,1.5,4,2,2");
     let p = pvs(&scene, &c, Params::default());
     assert!(p.contains(&0), "the wall is visible");
-    assert!(!p.contains(&1), "the low building behind the wall is hidden: {p:?}");
+    assert!(
+        !p.contains(&1),
+        "the low building behind the wall is hidden: {p:?}"
+    );
     assert!(p.contains(&2), "the tower behind the wall is visible");
     assert!(p.contains(&3), "the building in the open is visible");
     assert_conservative(&scene, &c, &p);
@@ -62,7 +68,10 @@ fn method_is_created_by_name_and_records_its_parameters() {
     let m = create("ext-proj", scene.clone(), &MethodOptions::default()).expect("create");
     assert_eq!(m.name(), "ext-proj");
     assert!(m.is_conservative());
-    assert!(m.params().iter().any(|(k, v)| k == "resolution" && v == "256"));
+    assert!(m
+        .params()
+        .iter()
+        .any(|(k, v)| k == "resolution" && v == "256"));
     let c = cell("0,-2,1.5,4,2,2");
     assert_eq!(m.pvs(&c).expect("pvs"), pvs(&scene, &c, Params::default()));
 }
@@ -97,7 +106,10 @@ fn one_metre_slit_keeps_what_is_behind_visible() {
     let c = cell("0,-1,1.5,2,1,2");
     let p = pvs(&scene, &c, Params::default());
     assert!(p.contains(&2), "visible through the slit: {p:?}");
-    assert!(!p.contains(&3), "off-axis building behind the wall is hidden: {p:?}");
+    assert!(
+        !p.contains(&3),
+        "off-axis building behind the wall is hidden: {p:?}"
+    );
     assert_conservative(&scene, &c, &p);
 }
 
@@ -115,7 +127,10 @@ fn courtyard_hides_the_outside() {
     let c = cell("-3,-3,1.5,3,3,2");
     let p = pvs(&scene, &c, Params::default());
     assert!(p.contains(&0));
-    assert!(!p.contains(&1), "outside building hidden by the courtyard: {p:?}");
+    assert!(
+        !p.contains(&1),
+        "outside building hidden by the courtyard: {p:?}"
+    );
     assert!(p.contains(&2), "the tower rises above the courtyard");
     assert_conservative(&scene, &c, &p);
 }
@@ -125,15 +140,18 @@ fn courtyard_hides_the_outside() {
 #[test]
 fn cells_touching_and_overlapping_a_facade() {
     let scene = Arc::new(Scene::from_objects(vec![
-        block(0.0, 10.0, 50.0, 20.0, 12.0),  // 0 facade along the street at y = 10
+        block(0.0, 10.0, 50.0, 20.0, 12.0), // 0 facade along the street at y = 10
         block(0.0, -20.0, 50.0, -5.0, 12.0), // 1 other side of the street
-        block(60.0, 0.0, 70.0, 8.0, 6.0),    // 2 down the street, in view
-        block(10.0, 25.0, 20.0, 35.0, 8.0),  // 3 behind the facade
+        block(60.0, 0.0, 70.0, 8.0, 6.0),   // 2 down the street, in view
+        block(10.0, 25.0, 20.0, 35.0, 8.0), // 3 behind the facade
     ]));
     for s in ["10,0,1.5,20,10,2", "10,2,1.5,20,12,2"] {
         let c = cell(s);
         let p = pvs(&scene, &c, Params::default());
-        assert!(p.contains(&0) && p.contains(&1) && p.contains(&2), "{s}: {p:?}");
+        assert!(
+            p.contains(&0) && p.contains(&1) && p.contains(&2),
+            "{s}: {p:?}"
+        );
         assert_conservative(&scene, &c, &p);
     }
     let p = pvs(&scene, &cell("10,0,1.5,20,10,2"), Params::default());

@@ -4,19 +4,18 @@
 //!
 //! A pixel receives depth `d` only when it is entirely covered by the union of the
 //! Projections whose depth is at most `d`; its value is the minimum such `d` (the
-//! occluder closest to the cell, §2.3). Coverage is computed per pixel row: each
-//! convex Projection contributes the interval of abscissae whose whole vertical
-//! extent within the row lies inside it; intervals of all pieces are merged before a
-//! pixel is tested, so two pieces sharing an edge leave no crack (unlike shrinking
-//! every piece by a pixel separately).
+//! occluder closest to the cell, §2.3). Coverage is computed per pixel row from the
+//! pieces' extents at the row's two ordinates, joining pieces that overlap across the
+//! whole row (see [`CoverageBuilder::finish`]), so two pieces sharing an edge — even a
+//! slanted one — leave no crack (unlike shrinking every piece by a pixel separately).
 //!
 //! Depths are stored as `f32`, rounded up for occluders; occludee depths are rounded
 //! down before the comparison, and ties count as visible.
 
 use sightline_geom::DVec2;
 
-/// Intervals closer than this (in pixels) are merged: they come from pieces of one
-/// decomposed solid whose shared edge was computed twice.
+/// Pieces closer than this (in pixels) count as overlapping: they come from pieces of
+/// one decomposed solid whose shared edge was computed twice.
 const MERGE_TOL_PX: f64 = 1e-7;
 
 /// Round an occluder depth up to `f32`.
@@ -43,7 +42,7 @@ pub fn depth_down(d: f64) -> f32 {
 pub struct CoverageBuilder {
     n: usize,
     /// Per row: (left, right, depth) intervals fully covered over the row's height.
-    rows: Vec<Vec<(f64, f64, f32)>>,
+    rows: Vec<Vec<Band>>,
 }
 
 impl CoverageBuilder {
@@ -97,52 +96,109 @@ impl CoverageBuilder {
         }
         for j in j0..j1 {
             let (a, b) = (span[(j - j0) as usize], span[(j - j0 + 1) as usize]);
-            // Left boundary of a convex polygon is convex in y, the right one concave:
-            // over the row their extremes are at the row's two ordinates.
-            let l = a.0.max(b.0);
-            let r = a.1.min(b.1);
-            if r > l && (j as usize) < self.n {
-                self.rows[j as usize].push((l, r, depth));
+            if (j as usize) < self.n && a.1 >= a.0 && b.1 >= b.0 {
+                self.rows[j as usize].push(Band {
+                    l0: a.0,
+                    r0: a.1,
+                    l1: b.0,
+                    r1: b.1,
+                    depth,
+                });
             }
         }
     }
 
     /// Resolve into a depth map (`+∞` where uncovered).
+    ///
+    /// Per row, the bands (pieces spanning the row's whole height) are added by
+    /// increasing depth and joined into components when they overlap at both of the
+    /// row's ordinates — then, the left boundary of a convex piece being convex and
+    /// the right one concave, they overlap at every ordinate in between, so the union
+    /// of a component is an interval at each ordinate. A component covers the
+    /// abscissae `[min L, max R]`, with `L = max(l₀, l₁)` and `R = min(r₀, r₁)` of
+    /// its members; a pixel inside it is entirely covered.
     pub fn finish(mut self) -> DepthMap {
         let n = self.n;
         let mut depth = vec![f32::INFINITY; n * n];
-        let mut merged: Vec<(f64, f64)> = Vec::new();
+        let mut parent: Vec<usize> = Vec::new();
+        let mut span: Vec<(f64, f64)> = Vec::new();
+        fn find(parent: &mut [usize], mut k: usize) -> usize {
+            while parent[k] != k {
+                parent[k] = parent[parent[k]];
+                k = parent[k];
+            }
+            k
+        }
         for (j, row) in self.rows.iter_mut().enumerate() {
             if row.is_empty() {
                 continue;
             }
-            row.sort_by(|a, b| a.2.total_cmp(&b.2));
-            merged.clear();
+            row.sort_by(|a, b| a.depth.total_cmp(&b.depth));
+            parent.clear();
+            span.clear();
             let out = &mut depth[j * n..(j + 1) * n];
-            for &(l, r, d) in row.iter() {
-                // Insert [l, r] into the sorted disjoint list, merging neighbours.
-                let pos = merged.partition_point(|iv| iv.1 < l - MERGE_TOL_PX);
-                let mut lo = l;
-                let mut hi = r;
-                let mut end = pos;
-                while end < merged.len() && merged[end].0 <= hi + MERGE_TOL_PX {
-                    lo = lo.min(merged[end].0);
-                    hi = hi.max(merged[end].1);
-                    end += 1;
+            for k in 0..row.len() {
+                let b = row[k];
+                parent.push(k);
+                span.push((b.l0.max(b.l1), b.r0.min(b.r1)));
+                let mut skip: (f64, f64) = (0.0, -1.0);
+                for m in 0..k {
+                    if !row[m].overlaps(&b) {
+                        continue;
+                    }
+                    let (rm, rk) = (find(&mut parent, m), find(&mut parent, k));
+                    if rm == rk {
+                        continue;
+                    }
+                    let (om, ok) = (span[rm], span[rk]);
+                    // Only components that existed before this band were assigned.
+                    if om.1 - om.0 > skip.1 - skip.0 {
+                        skip = om;
+                    }
+                    parent[rm] = rk;
+                    span[rk] = (om.0.min(ok.0), om.1.max(ok.1));
                 }
-                merged.splice(pos..end, std::iter::once((lo, hi)));
-                // Newly covered pixels intersect [l, r] and lie within [lo, hi].
-                let i0 = (l.floor().max(lo.ceil())).max(0.0) as i64;
-                let i1 = ((r.ceil()).min(hi.floor()) as i64).min(n as i64);
+                let root = find(&mut parent, k);
+                let (lo, hi) = span[root];
+                if !(hi > lo) {
+                    continue;
+                }
+                // Pixels of an earlier component were assigned with a smaller depth.
+                let (s0, s1) = (skip.0.ceil(), skip.1.floor());
+                let i0 = lo.ceil().max(0.0) as i64;
+                let i1 = (hi.floor() as i64).min(n as i64);
                 for i in i0..i1 {
+                    let f = i as f64;
+                    if f >= s0 && f + 1.0 <= s1 {
+                        continue;
+                    }
                     let px = &mut out[i as usize];
                     if px.is_infinite() {
-                        *px = d;
+                        *px = b.depth;
                     }
                 }
             }
         }
         DepthMap::new(n, depth)
+    }
+}
+
+/// A convex piece's extent along one pixel row `[j, j+1]`: `[l0, r0]` at ordinate `j`,
+/// `[l1, r1]` at `j + 1`.
+#[derive(Clone, Copy, Debug)]
+struct Band {
+    l0: f64,
+    r0: f64,
+    l1: f64,
+    r1: f64,
+    depth: f32,
+}
+
+impl Band {
+    /// Overlap at both ordinates (hence at every ordinate between, by convexity).
+    fn overlaps(&self, o: &Band) -> bool {
+        let t = MERGE_TOL_PX;
+        self.r0 >= o.l0 - t && o.r0 >= self.l0 - t && self.r1 >= o.l1 - t && o.r1 >= self.l1 - t
     }
 }
 
@@ -206,7 +262,12 @@ impl DepthMap {
         }
         let span = self.n / m; // pixels per node at this level
         let half = span / 2;
-        for (ci, cj) in [(2 * i, 2 * j), (2 * i + 1, 2 * j), (2 * i, 2 * j + 1), (2 * i + 1, 2 * j + 1)] {
+        for (ci, cj) in [
+            (2 * i, 2 * j),
+            (2 * i + 1, 2 * j),
+            (2 * i, 2 * j + 1),
+            (2 * i + 1, 2 * j + 1),
+        ] {
             let (x0, y0) = (ci * half, cj * half);
             let (x1, y1) = (x0 + half - 1, y0 + half - 1);
             if x1 < r[0] || x0 > r[2] || y1 < r[1] || y0 > r[3] {
@@ -302,11 +363,19 @@ mod tests {
     fn union_of_pieces_has_no_crack() {
         let mut b = CoverageBuilder::new(8);
         b.add_convex(
-            &[DVec2::new(0.0, 0.0), DVec2::new(8.0, 0.0), DVec2::new(8.0, 8.0)],
+            &[
+                DVec2::new(0.0, 0.0),
+                DVec2::new(8.0, 0.0),
+                DVec2::new(8.0, 8.0),
+            ],
             2.0,
         );
         b.add_convex(
-            &[DVec2::new(0.0, 0.0), DVec2::new(8.0, 8.0), DVec2::new(0.0, 8.0)],
+            &[
+                DVec2::new(0.0, 0.0),
+                DVec2::new(8.0, 8.0),
+                DVec2::new(0.0, 8.0),
+            ],
             1.0,
         );
         let m = b.finish();
@@ -336,7 +405,10 @@ mod tests {
             pixel_range(DVec2::new(1.0, 1.5), DVec2::new(2.0, 1.5), 8),
             Some([0, 1, 2, 1])
         );
-        assert_eq!(pixel_range(DVec2::new(-0.1, 0.0), DVec2::new(1.0, 1.0), 8), None);
+        assert_eq!(
+            pixel_range(DVec2::new(-0.1, 0.0), DVec2::new(1.0, 1.0), 8),
+            None
+        );
     }
 
     #[test]

@@ -31,6 +31,7 @@
 
 pub mod adaptive;
 pub mod depth_map;
+pub mod experiments;
 pub mod occludee;
 pub mod occluders;
 pub mod planes;
@@ -68,6 +69,9 @@ pub struct Params {
     pub max_occluders: usize,
     /// Candidate plane positions evaluated by the placement heuristic.
     pub plane_candidates: usize,
+    /// Planes kept per direction (the paper uses one; more catch both nearby slices
+    /// and the umbra of farther rows).
+    pub planes_per_direction: usize,
     /// Occludee boxes that fail are split in two, recursively, this many times.
     pub occludee_splits: u32,
     /// Adaptive subdivision (§6.1): split a cell while its PVS has more objects than
@@ -88,6 +92,7 @@ impl Default for Params {
             solid_angle: 0.002,
             max_occluders: 600,
             plane_candidates: 16,
+            planes_per_direction: 2,
             occludee_splits: 2,
             adaptive_budget: None,
             adaptive_min_m: 5.0,
@@ -149,7 +154,8 @@ impl PlaneMap {
         let Some(r) = pixel_range(lo, hi, self.map.n) else {
             return false;
         };
-        self.map.all_below(r[0], r[1], r[2], r[3], depth_down(depth))
+        self.map
+            .all_below(r[0], r[1], r[2], r[3], depth_down(depth))
     }
 }
 
@@ -193,7 +199,12 @@ impl ExtProj {
 
     /// The occluder pieces relevant to `cell` in direction `dir`, clipped beyond the
     /// cell's far face, largest solid angle first, at most `max_occluders`.
-    pub(crate) fn local_pieces(&self, cell: &ViewCell, dir: Direction, ids: &[u32]) -> Vec<LocalPiece> {
+    pub(crate) fn local_pieces(
+        &self,
+        cell: &ViewCell,
+        dir: Direction,
+        ids: &[u32],
+    ) -> Vec<LocalPiece> {
         let lc = dir.box_to_local(cell.min, cell.max);
         let w_min = lc.max.x + FACE_CLEARANCE_M;
         let mut out: Vec<LocalPiece> = Vec::new();
@@ -208,7 +219,10 @@ impl ExtProj {
                 continue;
             }
             let near = vertices.iter().map(|p| p.x).fold(f64::INFINITY, f64::min);
-            let far = vertices.iter().map(|p| p.x).fold(f64::NEG_INFINITY, f64::max);
+            let far = vertices
+                .iter()
+                .map(|p| p.x)
+                .fold(f64::NEG_INFINITY, f64::max);
             let dist = (near - lc.max.x).max(0.5);
             out.push(LocalPiece {
                 index: i,
@@ -224,12 +238,20 @@ impl ExtProj {
     }
 
     /// §6.1 "Choice of the projection plane": a candidate plane just behind each
-    /// occluder; keep the one whose depth map has the largest filled fraction.
-    pub(crate) fn choose_plane(&self, dir: Direction, lc: &LocalBox, pieces: &[LocalPiece]) -> Option<f64> {
+    /// occluder, scored by the fraction of its pixels the Projections and slices fill.
+    /// The best `planes_per_direction` candidates are kept, each at least 1.5× nearer
+    /// or farther (from the cell's face) than those already kept: a near plane
+    /// captures slices of the nearby blocks, a far one the umbra of whole rows.
+    pub(crate) fn choose_planes(
+        &self,
+        dir: Direction,
+        lc: &LocalBox,
+        pieces: &[LocalPiece],
+    ) -> Vec<f64> {
         let scoring: Vec<&LocalPiece> = pieces.iter().take(48).collect();
         let fars: Vec<f64> = scoring.iter().map(|p| p.far + 1e-3).collect();
         let cands = candidate_positions(&fars, self.params.plane_candidates);
-        let mut best: Option<(f64, f64)> = None;
+        let mut scored: Vec<(f64, f64)> = Vec::new();
         for x in cands {
             let plane = Plane::new(dir, lc, x, self.params.resolution_px, self.params.extension);
             let mut filled = 0.0;
@@ -238,21 +260,43 @@ impl ExtProj {
                     filled += polygon_area(&poly).abs();
                 }
                 if p.near < x && x < p.far {
-                    if let Some(s) = self.occluders.pieces[p.index as usize].occluder.slice(dir, x) {
+                    if let Some(s) = self.occluders.pieces[p.index as usize]
+                        .occluder
+                        .slice(dir, x)
+                    {
                         filled += polygon_area(&s).abs();
                     }
                 }
             }
             let score = filled / plane.rect.size().x / plane.rect.size().y;
-            if best.is_none_or(|b| score > b.1) {
-                best = Some((x, score));
+            if score > 0.0 {
+                scored.push((x, score));
             }
         }
-        best.filter(|b| b.1 > 0.0).map(|b| b.0)
+        scored.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.total_cmp(&b.0)));
+        let mut kept: Vec<f64> = Vec::new();
+        for (x, _) in scored {
+            if kept.len() >= self.params.planes_per_direction {
+                break;
+            }
+            let d = x - lc.max.x;
+            if kept.iter().all(|k| {
+                let dk = k - lc.max.x;
+                d > 1.5 * dk || dk > 1.5 * d
+            }) {
+                kept.push(x);
+            }
+        }
+        kept
     }
 
     /// Draw the Projections (and slices) of `pieces` on `plane` into a depth map.
-    pub(crate) fn depth_map(&self, plane: &Plane, lc: &LocalBox, pieces: &[LocalPiece]) -> DepthMap {
+    pub(crate) fn depth_map(
+        &self,
+        plane: &Plane,
+        lc: &LocalBox,
+        pieces: &[LocalPiece],
+    ) -> DepthMap {
         let mut b = CoverageBuilder::new(plane.n);
         for p in pieces {
             if let Some((poly, depth)) = extended_projection(&p.vertices, lc, plane.x) {
@@ -260,7 +304,10 @@ impl ExtProj {
                 b.add_convex(&px, depth_up(depth));
             }
             if p.near < plane.x && plane.x < p.far {
-                if let Some(s) = self.occluders.pieces[p.index as usize].occluder.slice(plane.dir, plane.x) {
+                if let Some(s) = self.occluders.pieces[p.index as usize]
+                    .occluder
+                    .slice(plane.dir, plane.x)
+                {
                     let px: Vec<DVec2> = s.iter().map(|q| plane.to_px(*q)).collect();
                     b.add_convex(&px, 0.0);
                 }
@@ -279,23 +326,34 @@ impl ExtProj {
             if pieces.is_empty() {
                 continue;
             }
-            let Some(x) = self.choose_plane(dir, &lc, &pieces) else {
-                continue;
-            };
-            let plane = Plane::new(dir, &lc, x, self.params.resolution_px, self.params.extension);
-            let map = self.depth_map(&plane, &lc, &pieces);
-            maps.push(PlaneMap {
-                plane,
-                cell: lc,
-                map,
-            });
+            for x in self.choose_planes(dir, &lc, &pieces) {
+                let plane = Plane::new(
+                    dir,
+                    &lc,
+                    x,
+                    self.params.resolution_px,
+                    self.params.extension,
+                );
+                let map = self.depth_map(&plane, &lc, &pieces);
+                maps.push(PlaneMap {
+                    plane,
+                    cell: lc,
+                    map,
+                });
+            }
         }
         maps
     }
 
     /// Whether a box is hidden on some plane; boxes that fail are split along their
     /// longest axis and both halves tried (hierarchical occludee test).
-    pub fn box_hidden(&self, b: &Aabb3, maps: &[PlaneMap], extra: &dyn Fn(&Aabb3) -> bool, splits: u32) -> bool {
+    pub fn box_hidden(
+        &self,
+        b: &Aabb3,
+        maps: &[PlaneMap],
+        extra: &dyn Fn(&Aabb3) -> bool,
+        splits: u32,
+    ) -> bool {
         if maps.iter().any(|m| m.hides(b, self.params.improved)) || extra(b) {
             return true;
         }
@@ -314,7 +372,8 @@ impl ExtProj {
         let (mut lo, mut hi) = (*b, *b);
         lo.max[axis] = mid;
         hi.min[axis] = mid;
-        self.box_hidden(&lo, maps, extra, splits - 1) && self.box_hidden(&hi, maps, extra, splits - 1)
+        self.box_hidden(&lo, maps, extra, splits - 1)
+            && self.box_hidden(&hi, maps, extra, splits - 1)
     }
 
     /// PVS of `cell` restricted to `candidates` (sorted object ids).
@@ -349,6 +408,10 @@ impl VisibilityMethod for ExtProj {
             ("resolution".to_string(), p.resolution_px.to_string()),
             ("improved".to_string(), p.improved.to_string()),
             ("extension".to_string(), p.extension.to_string()),
+            (
+                "planes_per_direction".to_string(),
+                p.planes_per_direction.to_string(),
+            ),
             ("sweep".to_string(), p.sweep.to_string()),
         ];
         if p.sweep {

@@ -22,7 +22,13 @@ use sightline_geom::{Aabb2, DVec2};
 
 /// The 2D bounding segment of the union of views (§3.1) on the line `w = x`, for a
 /// cell `[cw0,cw1]×[cu0,cu1]` and an occludee `[ow0,ow1]×[ou0,ou1]` with `ow0 > cw1`.
-pub fn bounding_segment(cw: [f64; 2], cu: [f64; 2], ow: [f64; 2], ou: [f64; 2], x: f64) -> [f64; 2] {
+pub fn bounding_segment(
+    cw: [f64; 2],
+    cu: [f64; 2],
+    ow: [f64; 2],
+    ou: [f64; 2],
+    x: f64,
+) -> [f64; 2] {
     let mut lo = f64::INFINITY;
     let mut hi = f64::NEG_INFINITY;
     for ew in cw {
@@ -155,7 +161,10 @@ mod tests {
         // Cell [0,2]x[0,2], occludee [10,12]x[0,2], plane at 5: views of the occludee
         // from the cell's points are within [0,2] (the supporting lines are horizontal).
         let s = bounding_segment([0.0, 2.0], [0.0, 2.0], [10.0, 12.0], [0.0, 2.0], 5.0);
-        assert!((s[0] - 0.0).abs() < 1e-12 && (s[1] - 2.0).abs() < 1e-12, "{s:?}");
+        assert!(
+            (s[0] - 0.0).abs() < 1e-12 && (s[1] - 2.0).abs() < 1e-12,
+            "{s:?}"
+        );
     }
 
     #[test]
@@ -167,14 +176,17 @@ mod tests {
         // Separating line from (0,2) through (10,0)... reaches 2 - 2*20/10 = -2.
         assert!(std[0] < -1.9 && std[1] > 3.9, "{std:?}");
         let imp = improved_segment(cw, cu, ow, ou, 20.0).unwrap();
-        assert!((imp[0] - 0.0).abs() < 1e-9 && (imp[1] - 2.0).abs() < 1e-9, "{imp:?}");
+        assert!(
+            (imp[0] - 0.0).abs() < 1e-9 && (imp[1] - 2.0).abs() < 1e-9,
+            "{imp:?}"
+        );
     }
 
     #[test]
     fn vanishing_point_gives_the_mid_point() {
         // A small occludee in front of a wide cell: supporting lines cross before x.
-        let imp = improved_segment([0.0, 1.0], [-10.0, 10.0], [20.0, 21.0], [0.0, 1.0], 40.0)
-            .unwrap();
+        let imp =
+            improved_segment([0.0, 1.0], [-10.0, 10.0], [20.0, 21.0], [0.0, 1.0], 40.0).unwrap();
         assert_eq!(imp[0], imp[1]);
         assert!(imp[0] > 0.0 && imp[0] < 1.0);
     }

@@ -24,8 +24,9 @@ use std::collections::HashMap;
 /// Inward move of boundary edges of fused footprints (two grid steps of the booleans).
 pub const INWARD_M: f64 = 2.0 * boolean::GRID_M;
 
-/// Prisms whose base is at most this high stand on the ground and join the fusion.
-const GROUND_M: f64 = 0.05;
+/// Prisms whose base is at most this high stand on the ground and join the fusion
+/// (exactly the ground: a gap under a raised prism must stay open).
+const GROUND_M: f64 = 0.0;
 
 /// At most this many height levels are fused (levels are chosen among the distinct
 /// heights; each building counts at the highest level not above its top).
@@ -315,12 +316,7 @@ pub fn convex_pieces(poly: &Polygon) -> Vec<(Vec<DVec2>, Vec<bool>)> {
 }
 
 /// Merge `p` (having edge a→b) and `q` (having edge b→a) into one ring.
-fn merge_across(
-    p: &[DVec2],
-    q: &[DVec2],
-    a: (u64, u64),
-    b: (u64, u64),
-) -> Option<Vec<DVec2>> {
+fn merge_across(p: &[DVec2], q: &[DVec2], a: (u64, u64), b: (u64, u64)) -> Option<Vec<DVec2>> {
     let ip = (0..p.len()).find(|&k| key(p[k]) == a && key(p[(k + 1) % p.len()]) == b)?;
     let iq = (0..q.len()).find(|&k| key(q[k]) == b && key(q[(k + 1) % q.len()]) == a)?;
     let mut out = Vec::with_capacity(p.len() + q.len() - 2);
@@ -416,10 +412,15 @@ mod tests {
         let scene = Scene::from_objects(vec![a, b]);
         let set = OccluderSet::build(&scene, 0.01);
         // Level 10: one 20x10 rectangle; level 20: the tall one alone.
-        let wide = set.pieces.iter().any(|p| {
-            p.bounds.max.z == 10.0 && p.bounds.size().x > 19.9 && p.bounds.size().y > 9.9
-        });
-        assert!(wide, "{:?}", set.pieces.iter().map(|p| p.bounds).collect::<Vec<_>>());
+        let wide = set
+            .pieces
+            .iter()
+            .any(|p| p.bounds.max.z == 10.0 && p.bounds.size().x > 19.9 && p.bounds.size().y > 9.9);
+        assert!(
+            wide,
+            "{:?}",
+            set.pieces.iter().map(|p| p.bounds).collect::<Vec<_>>()
+        );
         assert!(set.pieces.iter().any(|p| p.bounds.max.z == 20.0));
         assert_eq!(set.relevant(&scene.bounds).len(), set.pieces.len());
     }

@@ -187,7 +187,11 @@ pub fn view(e: DVec3, p: DVec3, x: f64) -> DVec2 {
 /// plane just behind each occluder" (§6.1). `far_depths` are the occluders' far
 /// depths; at most `max` evenly spread candidates are kept, nearest first.
 pub fn candidate_positions(far_depths: &[f64], max: usize) -> Vec<f64> {
-    let mut c: Vec<f64> = far_depths.iter().copied().filter(|d| d.is_finite()).collect();
+    let mut c: Vec<f64> = far_depths
+        .iter()
+        .copied()
+        .filter(|d| d.is_finite())
+        .collect();
     c.sort_by(f64::total_cmp);
     c.dedup_by(|a, b| (*a - *b).abs() < 0.05);
     if c.len() <= max || max == 0 {
@@ -223,7 +227,10 @@ mod tests {
         assert_eq!(p.rect.min.x, 5.0 - 5.0 - 20.0);
         let q = Plane::new(Direction::PosX, &cell, 20.0, 64, 1.5);
         assert!(q.rect.size().x > p.rect.size().x * 1.49);
-        assert_eq!(p.to_px(p.from_px(DVec2::new(3.0, 7.0))), DVec2::new(3.0, 7.0));
+        assert_eq!(
+            p.to_px(p.from_px(DVec2::new(3.0, 7.0))),
+            DVec2::new(3.0, 7.0)
+        );
     }
 
     #[test]

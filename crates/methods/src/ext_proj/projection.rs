@@ -21,6 +21,21 @@ use sightline_geom::{DVec2, DVec3};
 /// depth axis, so every view is a finite central projection.
 pub const FACE_CLEARANCE_M: f64 = 1e-3;
 
+/// How far below the ground a ground-standing prism is extended for the horizontal
+/// directions. The ground is opaque (SPEC §3: no sight line meets the ground below
+/// z = 0), so prism ∪ ground contains the extended prism, which stays convex; without
+/// it a plane in front of a wall would lose the rays that pass under the wall's view
+/// of its own foot and hit the ground.
+pub const BELOW_GROUND_M: f64 = 100.0;
+
+fn below_ground(base: f64) -> f64 {
+    if base <= 0.0 {
+        -BELOW_GROUND_M
+    } else {
+        base
+    }
+}
+
 /// A convex occluder in world coordinates.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ConvexOccluder {
@@ -56,14 +71,16 @@ impl ConvexOccluder {
                     }
                     out
                 } else {
-                    let local: Vec<DVec2> =
-                        footprint.iter().map(|p| dir.footprint_to_local(*p)).collect();
+                    let local: Vec<DVec2> = footprint
+                        .iter()
+                        .map(|p| dir.footprint_to_local(*p))
+                        .collect();
                     let clipped = clip_halfplane(&local, DVec2::X, w_min);
                     if clipped.len() < 3 {
                         return vec![];
                     }
                     let mut out = Vec::with_capacity(clipped.len() * 2);
-                    for z in [*base, *top] {
+                    for z in [below_ground(*base), *top] {
                         out.extend(clipped.iter().map(|p| DVec3::new(p.x, p.y, z)));
                     }
                     out
@@ -106,9 +123,10 @@ impl ConvexOccluder {
                     }
                 }
                 if hi > lo {
+                    let base = below_ground(*base);
                     Some(vec![
-                        DVec2::new(lo, *base),
-                        DVec2::new(hi, *base),
+                        DVec2::new(lo, base),
+                        DVec2::new(hi, base),
                         DVec2::new(hi, *top),
                         DVec2::new(lo, *top),
                     ])
@@ -132,7 +150,10 @@ pub fn extended_projection(
     if vertices.len() < 3 {
         return None;
     }
-    let far = vertices.iter().map(|p| p.x).fold(f64::NEG_INFINITY, f64::max);
+    let far = vertices
+        .iter()
+        .map(|p| p.x)
+        .fold(f64::NEG_INFINITY, f64::max);
     let mut acc: Option<Vec<DVec2>> = None;
     let mut pts = Vec::with_capacity(vertices.len());
     for e in cell.corners() {
@@ -330,7 +351,7 @@ mod tests {
             top: 3.0,
         };
         let s = p.slice(Direction::PosX, 1.0).unwrap();
-        assert!((polygon_area(&s) - 9.0).abs() < 1e-12);
+        assert!((polygon_area(&s) - 3.0 * (3.0 + BELOW_GROUND_M)).abs() < 1e-9);
         assert!(p.slice(Direction::PosX, 5.0).is_none());
         assert!(p.slice(Direction::PosZ, 1.0).is_some());
         assert!(p.slice(Direction::NegZ, -1.0).is_some());

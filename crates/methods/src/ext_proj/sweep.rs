@@ -17,10 +17,9 @@
 //! * plus the slices of the prisms cut by the plane (§3.3).
 //!
 //! Planes are spaced by `ΔD = D(K−1)P/(CN)` (§5.2: `D` distance from the equivalent
-//! cell, `C` its size, `P` the plane's size, `N` the resolution, `K` the kernel in
-//! pixels), scaled by one common factor so that the requested number of planes spans
-//! the depth range of the occluders — with too few planes for the paper's K the
-//! kernel simply grows; the spacing keeps the paper's shape (denser near the cell).
+//! cell, `C` its size, `P` the plane's size, `N` the resolution, `K = 5` the kernel
+//! in pixels) from just behind the nearest occluder; the sweep stops after the
+//! requested number of planes (denser near the cell, where occlusion varies fastest).
 //! Occludees behind a plane are hidden when their Projection (supporting lines,
 //! §3.1) covers only black pixels: black pixels have depth ≤ 0 by construction.
 
@@ -92,16 +91,11 @@ impl Sweep {
     }
 }
 
-/// Depths (local `w`) of the sweep planes for `k` planes over `[x0, x1]` following
-/// §5.2's spacing, scaled to fit.
+/// Depths (local `w`) of at most `k` sweep planes from `x0`, spaced as in §5.2, not
+/// beyond `x1`.
 pub fn plane_positions(ext: &ExtProj, lc: &LocalBox, x0: f64, x1: f64, k: usize) -> Vec<f64> {
     if k == 0 || !(x1 > x0) {
         return vec![];
-    }
-    if k == 1 {
-        // One plane: the geometric middle of the range (distances from the face).
-        let (d0, d1) = (x0 - lc.max.x, x1 - lc.max.x);
-        return vec![lc.max.x + (d0 * d1).sqrt()];
     }
     let n = ext.params.resolution_px as f64;
     let kk = ext.params.kernel_px.max(2) as f64;
@@ -113,28 +107,18 @@ pub fn plane_positions(ext: &ExtProj, lc: &LocalBox, x0: f64, x1: f64, k: usize)
         let d = x - lc.max.x;
         d * (kk - 1.0) * p / (c * n)
     };
-    let run = |lambda: f64| -> Vec<f64> {
-        let mut v = vec![x0];
-        while v.len() < k {
-            let x = *v.last().unwrap_or(&x0);
-            v.push(x + lambda * step(x));
+    // The paper's spacing from the first plane on; the sweep stops after k planes
+    // (occludees beyond the last plane are tested against its map).
+    let mut v = vec![x0];
+    while v.len() < k {
+        let x = v[v.len() - 1];
+        let next = x + step(x).max(1e-3);
+        if next > x1 {
+            break;
         }
-        v
-    };
-    // Find the scale so that the last plane lands on x1 (monotone in lambda).
-    let (mut lo, mut hi) = (0.0f64, 1.0f64);
-    while run(hi).last().copied().unwrap_or(x0) < x1 && hi < 1e9 {
-        hi *= 2.0;
+        v.push(next);
     }
-    for _ in 0..60 {
-        let mid = 0.5 * (lo + hi);
-        if run(mid).last().copied().unwrap_or(x0) < x1 {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    run(hi)
+    v
 }
 
 /// The equivalent planar cell of §5.1 on the cell's far-face plane `w = cw1`: every
@@ -144,7 +128,10 @@ pub fn equivalent_cell(lc: &LocalBox, plane: &Plane) -> sightline_geom::Aabb2 {
     let (r0, r1) = (plane.rect.min, plane.rect.max);
     let c0 = DVec2::new(lc.min.y, lc.min.z);
     let c1 = DVec2::new(lc.max.y, lc.max.z);
-    sightline_geom::Aabb2::new(c0.min(c0 * (1.0 - t) + r0 * t), c1.max(c1 * (1.0 - t) + r1 * t))
+    sightline_geom::Aabb2::new(
+        c0.min(c0 * (1.0 - t) + r0 * t),
+        c1.max(c1 * (1.0 - t) + r1 * t),
+    )
 }
 
 /// Re-project the occlusion map of `from` onto `to` (§5.1).
@@ -225,17 +212,14 @@ fn sweep_direction(
     let n = ext.params.resolution_px;
     let cell_size = DVec2::new(lc.max.y - lc.min.y, lc.max.z - lc.min.z);
     let mut out: Vec<SweepPlane> = Vec::with_capacity(xs.len());
-    let mut prev_x = f64::NEG_INFINITY;
     for &x in &xs {
         let plane = Plane::new(dir, &lc, x, n, ext.params.extension);
         let ps = plane.pixel_size();
         let mut b = CoverageBuilder::new(n);
         for o in &occ {
-            let is_piece = o.piece.is_some();
-            // Prism pieces are re-projected directly on every plane they are in front
-            // of (few and large); triangles only on the first plane behind them.
-            let in_slab = o.far <= x && (is_piece || o.far > prev_x);
-            if in_slab && !void_projection(o, &lc, cell_size, x, ps) {
+            // Every occluder in front of the plane is projected unless its Projection
+            // is provably void (most leaves far in front of it).
+            if o.far <= x && !void_projection(o, &lc, cell_size, x, ps) {
                 if let Some((poly, _)) = extended_projection(&o.vertices, &lc, x) {
                     let px: Vec<DVec2> = poly.iter().map(|q| plane.to_px(*q)).collect();
                     b.add_convex(&px, 0.0);
@@ -267,7 +251,6 @@ fn sweep_direction(
             cell: lc,
             umbra: OcclusionMap::new(n, black),
         });
-        prev_x = x;
     }
     out.retain(|p| p.umbra.count() > 0);
     out
@@ -281,7 +264,8 @@ fn void_projection(o: &LocalOccluder, lc: &LocalBox, cell: DVec2, x: f64, ps: DV
     let scale = (x - lc.min.x) / near; // largest magnification of a view
     let width = o.ext * scale;
     let shift = cell * ((x - o.far) / (o.far - lc.min.x)).max(0.0);
-    width.x <= shift.x || width.y <= shift.y || width.x < ps.x || width.y < ps.y
+    let _ = ps;
+    width.x <= shift.x || width.y <= shift.y
 }
 
 #[cfg(test)]
