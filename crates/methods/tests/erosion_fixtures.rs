@@ -100,14 +100,25 @@ fn touching_buildings_fuse() {
     // A row of touching 6 m wide, 12 m deep houses: eroded one by one by a 10 m cell
     // they all vanish; fused they form a 30 m block that still hides the one behind.
     let mut objs: Vec<_> = (0..5)
-        .map(|i| block(20.0, -15.0 + 6.0 * i as f64, 32.0, -9.0 + 6.0 * i as f64, 12.0))
+        .map(|i| {
+            block(
+                20.0,
+                -15.0 + 6.0 * i as f64,
+                32.0,
+                -9.0 + 6.0 * i as f64,
+                12.0,
+            )
+        })
         .collect();
     objs.push(block(40.0, -3.0, 48.0, 3.0, 10.0));
     let scene = Arc::new(Scene::from_objects(objs));
     let c = cell(0.0, -5.0, 10.0, 5.0);
     for m in ["erosion", "erosion-segment", "erosion-cell"] {
         let p = pvs(&scene, m, &c);
-        assert!(!p.contains(&5), "{m}: the block behind the fused row is hidden: {p:?}");
+        assert!(
+            !p.contains(&5),
+            "{m}: the block behind the fused row is hidden: {p:?}"
+        );
     }
     assert_conservative(&scene, &c);
 }
@@ -122,7 +133,10 @@ fn one_metre_slit_lets_the_street_through() {
     ]));
     let c = cell(0.0, -5.0, 10.0, 5.0);
     let vs = sampled_visible(&scene, &c, 5);
-    assert!(vs.contains(&2) && vs.contains(&3), "oracle sees through the slit: {vs:?}");
+    assert!(
+        vs.contains(&2) && vs.contains(&3),
+        "oracle sees through the slit: {vs:?}"
+    );
     assert_conservative(&scene, &c);
 }
 
@@ -162,9 +176,14 @@ fn objects_straddling_cell_borders() {
 fn fig9_ordering_on_fixtures() {
     let scene = wall_scene();
     let c = cell(0.0, -5.0, 10.0, 5.0);
-    let n: Vec<usize> = ["shrink-sphere", "erosion-cell", "erosion-segment", "erosion"]
-        .iter()
-        .map(|m| pvs(&scene, m, &c).len())
-        .collect();
+    let n: Vec<usize> = [
+        "shrink-sphere",
+        "erosion-cell",
+        "erosion-segment",
+        "erosion",
+    ]
+    .iter()
+    .map(|m| pvs(&scene, m, &c).len())
+    .collect();
     assert!(n[0] >= n[1] && n[1] >= n[2] && n[2] >= n[3], "{n:?}");
 }

@@ -91,9 +91,23 @@ proptest! {
 
 /// A small random city on a 3×3 grid of blocks with streets, each block split into
 /// touching houses of random heights; the cell is placed in a street.
+#[allow(clippy::type_complexity)]
 fn city() -> impl Strategy<Value = (Vec<(f64, f64, f64, f64, f64)>, (f64, f64, f64))> {
-    let houses = prop::collection::vec((0..3usize, 0..3usize, 0..3usize, 3..40i32, prop::bool::weighted(0.85)), 6..20);
-    let cellpos = (0..4usize, 0..40i32, prop::sample::select(vec![6.0, 10.0, 16.0]));
+    let houses = prop::collection::vec(
+        (
+            0..3usize,
+            0..3usize,
+            0..3usize,
+            3..40i32,
+            prop::bool::weighted(0.85),
+        ),
+        6..20,
+    );
+    let cellpos = (
+        0..4usize,
+        0..40i32,
+        prop::sample::select(vec![6.0, 10.0, 16.0]),
+    );
     (houses, cellpos).prop_map(|(hs, (street, along, size))| {
         // Blocks 30 m wide, streets 12 m: block (i, j) spans [42 i, 42 i + 30].
         let mut out = Vec::new();
@@ -103,17 +117,32 @@ fn city() -> impl Strategy<Value = (Vec<(f64, f64, f64, f64, f64)>, (f64, f64, f
             }
             let (x0, y0) = (42.0 * i as f64, 42.0 * j as f64);
             // House k of 3 in the block, touching its neighbours.
-            let rect = (x0 + 10.0 * k as f64, y0, x0 + 10.0 * (k + 1) as f64, y0 + 30.0, h as f64);
-            if !out.iter().any(|o: &(f64, f64, f64, f64, f64)| o.0 == rect.0 && o.1 == rect.1) {
+            let rect = (
+                x0 + 10.0 * k as f64,
+                y0,
+                x0 + 10.0 * (k + 1) as f64,
+                y0 + 30.0,
+                h as f64,
+            );
+            if !out
+                .iter()
+                .any(|o: &(f64, f64, f64, f64, f64)| o.0 == rect.0 && o.1 == rect.1)
+            {
                 out.push(rect);
             }
         }
         // Cell in street `street` (vertical streets at x = 30..42, 72..84) or a
         // horizontal one, at `along` metres.
         let pos = if street < 2 {
-            (30.0 + 42.0 * street as f64 + 6.0 - size / 2.0, along as f64 * 2.5)
+            (
+                30.0 + 42.0 * street as f64 + 6.0 - size / 2.0,
+                along as f64 * 2.5,
+            )
         } else {
-            (along as f64 * 2.5, 30.0 + 42.0 * (street - 2) as f64 + 6.0 - size / 2.0)
+            (
+                along as f64 * 2.5,
+                30.0 + 42.0 * (street - 2) as f64 + 6.0 - size / 2.0,
+            )
         };
         (out, (pos.0, pos.1, size))
     })

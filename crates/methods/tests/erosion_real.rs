@@ -14,7 +14,9 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 fn data(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data").join(name)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../data")
+        .join(name)
 }
 
 /// Street cells: cells of `size` on a coarse grid around the scene centre whose
@@ -33,9 +35,15 @@ fn street_cells(scene: &Scene, size: f64, count: usize) -> Vec<ViewCell> {
             .iter()
             .any(|o| o.inner.iter().any(|pr| pr.footprint.contains(p)));
         if free {
-            let cell =
-                ViewCell::from_array([p.x - size / 2.0, p.y - size / 2.0, 1.5, p.x + size / 2.0, p.y + size / 2.0, 2.0])
-                    .expect("cell");
+            let cell = ViewCell::from_array([
+                p.x - size / 2.0,
+                p.y - size / 2.0,
+                1.5,
+                p.x + size / 2.0,
+                p.y + size / 2.0,
+                2.0,
+            ])
+            .expect("cell");
             out.push(cell);
         }
     }
@@ -50,7 +58,10 @@ fn near(scene: &Scene, cell: &ViewCell, r: f64) -> (Scene, Vec<u32>) {
     let ids: Vec<u32> = (0..scene.objects.len() as u32)
         .filter(|&i| scene.objects[i as usize].bounds.xy().intersects(&rect))
         .collect();
-    let objs = ids.iter().map(|&i| scene.objects[i as usize].clone()).collect();
+    let objs = ids
+        .iter()
+        .map(|&i| scene.objects[i as usize].clone())
+        .collect();
     (Scene::from_objects(objs), ids)
 }
 

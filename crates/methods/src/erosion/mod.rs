@@ -195,7 +195,8 @@ impl ErosionMethod {
                                 Test {
                                     element: el,
                                     target,
-                                    eye: ctx.z1 + shrink::eye_raise(&piece, ctx.rect, top.t, ctx.z1),
+                                    eye: ctx.z1
+                                        + shrink::eye_raise(&piece, ctx.rect, top.t, ctx.z1),
                                     t: top.t,
                                 }
                             }
@@ -376,4 +377,3 @@ impl VisibilityMethod for ErosionMethod {
         Ok(visible)
     }
 }
-

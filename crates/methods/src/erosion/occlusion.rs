@@ -92,7 +92,11 @@ impl Bins {
             return Err(ThroughEye);
         }
         let (ta, tb) = (pa.y.atan2(pa.x), pb.y.atan2(pb.x));
-        let (lo, mut hi) = if pa.perp_dot(pb) >= 0.0 { (ta, tb) } else { (tb, ta) };
+        let (lo, mut hi) = if pa.perp_dot(pb) >= 0.0 {
+            (ta, tb)
+        } else {
+            (tb, ta)
+        };
         if hi < lo {
             hi += TAU;
         }
@@ -243,7 +247,10 @@ impl PolarMap {
         let mut visit = |bin: usize| {
             if self.needed[bin] {
                 any_needed = true;
-                if !self.stairs[bin].iter().any(|&(ra, hh)| ra <= d_min && hh >= h) {
+                if !self.stairs[bin]
+                    .iter()
+                    .any(|&(ra, hh)| ra <= d_min && hh >= h)
+                {
                     improve = true;
                 }
             }
@@ -279,16 +286,18 @@ impl PolarMap {
             for ring in rings {
                 let n = ring.len();
                 for i in 0..n {
-                    let r = self.bins.edge(ring[i], ring[(i + 1) % n], |bin, lo, hi, c| {
-                        if needed[bin] {
-                            scratch.push(Hit {
-                                bin,
-                                lo,
-                                hi,
-                                crosses_mid: c,
-                            })
-                        }
-                    });
+                    let r = self
+                        .bins
+                        .edge(ring[i], ring[(i + 1) % n], |bin, lo, hi, c| {
+                            if needed[bin] {
+                                scratch.push(Hit {
+                                    bin,
+                                    lo,
+                                    hi,
+                                    crosses_mid: c,
+                                })
+                            }
+                        });
                     if r.is_err() {
                         ok = false;
                     }

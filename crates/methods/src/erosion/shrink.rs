@@ -32,7 +32,12 @@ use sightline_geom::{Aabb2, DVec2};
 pub fn clip_ring(ring: &[DVec2], lo: DVec2, hi: DVec2) -> Vec<DVec2> {
     let mut pts = ring.to_vec();
     // (axis, bound, keep_greater)
-    let planes = [(0, lo.x, true), (0, hi.x, false), (1, lo.y, true), (1, hi.y, false)];
+    let planes = [
+        (0, lo.x, true),
+        (0, hi.x, false),
+        (1, lo.y, true),
+        (1, hi.y, false),
+    ];
     for (axis, bound, greater) in planes {
         if !bound.is_finite() || pts.is_empty() {
             continue;
@@ -91,8 +96,16 @@ pub struct Piece {
 /// Cut `ring` by the cell footprint's lines into pieces (empty pieces dropped).
 pub fn pieces(ring: &[DVec2], cell: Aabb2) -> Vec<Piece> {
     let inf = f64::INFINITY;
-    let xs = [(-inf, cell.min.x), (cell.min.x, cell.max.x), (cell.max.x, inf)];
-    let ys = [(-inf, cell.min.y), (cell.min.y, cell.max.y), (cell.max.y, inf)];
+    let xs = [
+        (-inf, cell.min.x),
+        (cell.min.x, cell.max.x),
+        (cell.max.x, inf),
+    ];
+    let ys = [
+        (-inf, cell.min.y),
+        (cell.min.y, cell.max.y),
+        (cell.max.y, inf),
+    ];
     let bb = Aabb2::from_points(ring);
     let mut out = Vec::new();
     for (ix, &(xl, xh)) in xs.iter().enumerate() {

@@ -142,8 +142,8 @@ impl CoverageBuilder {
                 parent.push(k);
                 span.push((b.l0.max(b.l1), b.r0.min(b.r1)));
                 let mut skip: (f64, f64) = (0.0, -1.0);
-                for m in 0..k {
-                    if !row[m].overlaps(&b) {
+                for (m, bm) in row.iter().enumerate().take(k) {
+                    if !bm.overlaps(&b) {
                         continue;
                     }
                     let (rm, rk) = (find(&mut parent, m), find(&mut parent, k));

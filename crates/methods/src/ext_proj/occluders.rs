@@ -244,6 +244,9 @@ pub fn fused_levels(ground: &[(&Polygon, f64)]) -> Vec<(f64, Vec<Polygon>)> {
     out
 }
 
+/// A directed edge between two vertices identified by their exact bits.
+type EdgeKey = ((u64, u64), (u64, u64));
+
 fn key(p: DVec2) -> (u64, u64) {
     (p.x.to_bits(), p.y.to_bits())
 }
@@ -254,7 +257,7 @@ fn key(p: DVec2) -> (u64, u64) {
 /// (counter-clockwise) with, per edge, whether it lies on the input's boundary.
 pub fn convex_pieces(poly: &Polygon) -> Vec<(Vec<DVec2>, Vec<bool>)> {
     let poly = poly.clone().normalized();
-    let boundary: std::collections::HashSet<((u64, u64), (u64, u64))> =
+    let boundary: std::collections::HashSet<EdgeKey> =
         poly.edges().map(|(a, b)| (key(a), key(b))).collect();
     let mut parts: Vec<Option<Vec<DVec2>>> = poly
         .triangulate()
@@ -263,7 +266,7 @@ pub fn convex_pieces(poly: &Polygon) -> Vec<(Vec<DVec2>, Vec<bool>)> {
         .map(|t| Some(t.to_vec()))
         .collect();
     // Directed edge → owning part.
-    let mut owner: HashMap<((u64, u64), (u64, u64)), usize> = HashMap::new();
+    let mut owner: HashMap<EdgeKey, usize> = HashMap::new();
     for (i, p) in parts.iter().enumerate() {
         if let Some(p) = p {
             for k in 0..p.len() {
@@ -272,7 +275,7 @@ pub fn convex_pieces(poly: &Polygon) -> Vec<(Vec<DVec2>, Vec<bool>)> {
         }
     }
     // Internal diagonals, each once, in a deterministic order.
-    let mut diagonals: Vec<((u64, u64), (u64, u64))> = owner
+    let mut diagonals: Vec<EdgeKey> = owner
         .keys()
         .filter(|(a, b)| !boundary.contains(&(*a, *b)) && a < b)
         .copied()

@@ -5,7 +5,12 @@
 use sightline_geom::{DVec2, DVec3, Polygon, ViewCell};
 use sightline_scene::{Object, Prism, Scene};
 
-pub const METHODS: [&str; 4] = ["erosion", "erosion-segment", "erosion-cell", "shrink-sphere"];
+pub const METHODS: [&str; 4] = [
+    "erosion",
+    "erosion-segment",
+    "erosion-cell",
+    "shrink-sphere",
+];
 
 pub fn block(x0: f64, y0: f64, x1: f64, y1: f64, h: f64) -> Object {
     Object::block(
@@ -97,8 +102,8 @@ fn blockers(o: &Object) -> &[Prism] {
 pub fn surface_samples(o: &Object, per_edge: usize, levels: usize) -> Vec<DVec3> {
     let mut out = Vec::new();
     for p in &o.outer {
-        let c = p.footprint.exterior.iter().copied().sum::<DVec2>()
-            / p.footprint.exterior.len() as f64;
+        let c =
+            p.footprint.exterior.iter().copied().sum::<DVec2>() / p.footprint.exterior.len() as f64;
         for (a, b) in p.footprint.edges() {
             for i in 0..per_edge {
                 let q = a + (b - a) * ((i as f64 + 0.5) / per_edge as f64);
@@ -119,7 +124,8 @@ pub fn surface_samples(o: &Object, per_edge: usize, levels: usize) -> Vec<DVec3>
         let bb = p.footprint.bbox();
         for i in 0..8 {
             for j in 0..8 {
-                let q = bb.min + bb.size() * DVec2::new((i as f64 + 0.5) / 8.0, (j as f64 + 0.5) / 8.0);
+                let q =
+                    bb.min + bb.size() * DVec2::new((i as f64 + 0.5) / 8.0, (j as f64 + 0.5) / 8.0);
                 if p.footprint.contains(q) {
                     out.push(q.extend(p.top));
                 }
@@ -145,9 +151,9 @@ pub fn sampled_visible(scene: &Scene, cell: &ViewCell, grid: usize) -> Vec<u32> 
                     if k == 0 { cell.min.z } else { cell.max.z },
                 );
                 let inside = scene.objects.iter().any(|o| {
-                    o.inner.iter().any(|p| {
-                        e.z > p.base && e.z < p.top && p.footprint.contains(e.truncate())
-                    })
+                    o.inner
+                        .iter()
+                        .any(|p| e.z > p.base && e.z < p.top && p.footprint.contains(e.truncate()))
                 });
                 if !inside {
                     eyes.push(e);
@@ -175,5 +181,8 @@ pub fn sampled_visible(scene: &Scene, cell: &ViewCell, grid: usize) -> Vec<u32> 
 
 /// Missed objects of a PVS against the sampled visible set.
 pub fn missed(pvs: &[u32], vs: &[u32]) -> Vec<u32> {
-    vs.iter().filter(|v| pvs.binary_search(v).is_err()).copied().collect()
+    vs.iter()
+        .filter(|v| pvs.binary_search(v).is_err())
+        .copied()
+        .collect()
 }
