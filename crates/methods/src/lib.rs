@@ -19,6 +19,9 @@
 //! assert_eq!(all.pvs(&cell).unwrap(), vec![0]);
 //! ```
 
+// `!(a < b)` is the NaN-safe way to reject bad values in geometric code: keep it.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod check;
 pub mod dual_ray;
 pub mod erosion;

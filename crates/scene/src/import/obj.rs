@@ -64,6 +64,8 @@ pub fn mesh_object(
 
 /// Parse OBJ text.
 pub fn parse(bytes: &[u8]) -> Result<Scene, ImportError> {
+    // Other tobj feature sets add fields: keep the struct update.
+    #[allow(clippy::needless_update)]
     let opts = tobj::LoadOptions {
         triangulate: true,
         single_index: true,

@@ -1,0 +1,437 @@
+//! `ext-proj`: conservative from-region occlusion culling with extended projections
+//! (Durand, Drettakis, Thollot, Puech, *Conservative Visibility Preprocessing using
+//! Extended Projections*, SIGGRAPH 2000; `../shared/papers/extended-projections-2000.txt`).
+//!
+//! **Guarantee**: an object is left out of the PVS only when, on some projection plane,
+//! the extended projection of (a box around) it lies inside the extended projections
+//! of occluders that are nearer than it from *every* point of the cell (§2.2, the
+//! chain of inclusions after Definition 2). It may report a hidden object as visible,
+//! never a visible object as hidden.
+//!
+//! Pipeline per cell (§6.1):
+//! 1. occluder selection by solid angle through a precomputed relevance tree
+//!    ([`occluders`]); occluders are the fused inner prisms of the objects;
+//! 2. for each of the six directions of the cell, a projection plane placed by the
+//!    filled-pixels heuristic and extended by 1.5 ([`planes`]);
+//! 3. extended projections of convex occluder pieces (intersection of the views from
+//!    the cell's vertices) and slices of the pieces cut by the plane ([`projection`]),
+//!    drawn with union-aware inner coverage into an extended depth map and its
+//!    max pyramid ([`depth_map`]);
+//! 4. occludee boxes projected with separating / supporting lines, or the improved
+//!    projection of §4 ([`occludee`]), tested hierarchically against the pyramid;
+//! 5. with `sweep`, the occlusion sweep of §5 ([`sweep`]): successive planes, the
+//!    previous occlusion map re-projected (eroded by the inverse image of the
+//!    equivalent planar cell) and new occluders — including every mesh triangle, the
+//!    leaves of a forest — added at each plane;
+//! 6. optionally the adaptive subdivision of §6.1 ([`adaptive`]).
+//!
+//! Parameters: `resolution_px` (default 256, rounded up to a power of two as the
+//! pyramid needs, §7.1), `sweep`, `planes` (number of sweep planes per direction,
+//! default 15 as in §7.2).
+
+pub mod adaptive;
+pub mod depth_map;
+pub mod experiments;
+pub mod occludee;
+pub mod occluders;
+pub mod planes;
+pub mod projection;
+pub mod sweep;
+
+use crate::{MethodError, MethodOptions, VisibilityMethod};
+use depth_map::{depth_down, depth_up, pixel_range, CoverageBuilder, DepthMap};
+use occludee::occludee_projection;
+use occluders::OccluderSet;
+use planes::{candidate_positions, Direction, LocalBox, Plane, PLANE_EXTENSION};
+use projection::{extended_projection, polygon_area, FACE_CLEARANCE_M};
+use sightline_geom::{Aabb3, DVec2, DVec3, ViewCell};
+use sightline_scene::Scene;
+use std::sync::Arc;
+
+/// Parameters of `ext-proj`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Params {
+    /// Depth-map resolution (pixels per side, a power of two).
+    pub resolution_px: usize,
+    /// Use the improved occludee projection of §4.
+    pub improved: bool,
+    /// Extension of the planes for the corner directions (§6.1: 1.5).
+    pub extension: f64,
+    /// Run the occlusion sweep of §5.
+    pub sweep: bool,
+    /// Sweep planes per direction.
+    pub sweep_planes: usize,
+    /// Kernel size K of §5 (pixels), which sets the spacing of the sweep planes.
+    pub kernel_px: usize,
+    /// Solid-angle threshold (sr) of occluder relevance (§6.1).
+    pub solid_angle: f64,
+    /// At most this many occluder pieces per direction (largest solid angle first).
+    pub max_occluders: usize,
+    /// Candidate plane positions evaluated by the placement heuristic.
+    pub plane_candidates: usize,
+    /// Planes kept per direction (the paper uses one; more catch both nearby slices
+    /// and the umbra of farther rows).
+    pub planes_per_direction: usize,
+    /// Occludee boxes that fail are split in two, recursively, this many times.
+    pub occludee_splits: u32,
+    /// Adaptive subdivision (§6.1): split a cell while its PVS has more objects than
+    /// this (None = off), down to `adaptive_min_m`.
+    pub adaptive_budget: Option<usize>,
+    pub adaptive_min_m: f64,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Params {
+            resolution_px: 256,
+            improved: true,
+            extension: PLANE_EXTENSION,
+            sweep: false,
+            sweep_planes: 15,
+            kernel_px: 5,
+            solid_angle: 0.002,
+            max_occluders: 600,
+            plane_candidates: 16,
+            planes_per_direction: 2,
+            occludee_splits: 2,
+            adaptive_budget: None,
+            adaptive_min_m: 5.0,
+        }
+    }
+}
+
+impl Params {
+    pub fn from_options(opts: &MethodOptions) -> Self {
+        let mut p = Params::default();
+        if let Some(r) = opts.resolution_px {
+            p.resolution_px = (r.clamp(8, 4096) as usize).next_power_of_two();
+        }
+        p.sweep = opts.sweep;
+        if let Some(k) = opts.planes {
+            p.sweep_planes = (k as usize).clamp(1, 256);
+        }
+        p
+    }
+}
+
+/// `ext-proj` prepared for a scene.
+pub struct ExtProj {
+    pub scene: Arc<Scene>,
+    pub params: Params,
+    pub occluders: OccluderSet,
+    /// Occludee boxes per object (outer prisms' boxes, or the bounds).
+    boxes: Vec<Vec<Aabb3>>,
+}
+
+/// Prepare `ext-proj` for `scene`.
+pub fn create(
+    name: &'static str,
+    scene: Arc<Scene>,
+    opts: &MethodOptions,
+) -> Result<Box<dyn VisibilityMethod>, MethodError> {
+    if name != "ext-proj" {
+        return Err(MethodError::Unknown(name.to_string()));
+    }
+    Ok(Box::new(ExtProj::new(scene, Params::from_options(opts))))
+}
+
+/// One plane of one direction, ready for occludee tests.
+pub struct PlaneMap {
+    pub plane: Plane,
+    pub cell: LocalBox,
+    pub map: DepthMap,
+}
+
+impl PlaneMap {
+    /// Whether the occludee box (world) is hidden on this plane.
+    pub fn hides(&self, b: &Aabb3, improved: bool) -> bool {
+        let occ = self.plane.dir.box_to_local(b.min, b.max);
+        let Some((rect, depth)) = occludee_projection(&self.cell, &occ, self.plane.x, improved)
+        else {
+            return false;
+        };
+        let (lo, hi) = (self.plane.to_px(rect.min), self.plane.to_px(rect.max));
+        let Some(r) = pixel_range(lo, hi, self.map.n) else {
+            return false;
+        };
+        self.map
+            .all_below(r[0], r[1], r[2], r[3], depth_down(depth))
+    }
+}
+
+/// A convex occluder piece in one direction's local frame.
+pub(crate) struct LocalPiece {
+    pub index: u32,
+    pub vertices: Vec<DVec3>,
+    pub near: f64,
+    pub far: f64,
+    /// Solid-angle proxy from the cell.
+    pub weight: f64,
+}
+
+impl ExtProj {
+    pub fn new(scene: Arc<Scene>, params: Params) -> Self {
+        let occluders = OccluderSet::build(&scene, params.solid_angle);
+        let boxes = scene
+            .objects
+            .iter()
+            .map(|o| {
+                let v: Vec<Aabb3> = o
+                    .outer
+                    .iter()
+                    .map(|p| p.aabb())
+                    .filter(|b| !b.is_empty())
+                    .collect();
+                if v.is_empty() {
+                    vec![o.bounds]
+                } else {
+                    v
+                }
+            })
+            .collect();
+        ExtProj {
+            scene,
+            params,
+            occluders,
+            boxes,
+        }
+    }
+
+    /// The occluder pieces relevant to `cell` in direction `dir`, clipped beyond the
+    /// cell's far face, largest solid angle first, at most `max_occluders`.
+    pub(crate) fn local_pieces(
+        &self,
+        cell: &ViewCell,
+        dir: Direction,
+        ids: &[u32],
+    ) -> Vec<LocalPiece> {
+        let lc = dir.box_to_local(cell.min, cell.max);
+        let w_min = lc.max.x + FACE_CLEARANCE_M;
+        let mut out: Vec<LocalPiece> = Vec::new();
+        for &i in ids {
+            let piece = &self.occluders.pieces[i as usize];
+            let lb = dir.box_to_local(piece.bounds.min, piece.bounds.max);
+            if lb.max.x <= w_min {
+                continue;
+            }
+            let vertices = piece.occluder.local_vertices(dir, w_min);
+            if vertices.len() < 3 {
+                continue;
+            }
+            let near = vertices.iter().map(|p| p.x).fold(f64::INFINITY, f64::min);
+            let far = vertices
+                .iter()
+                .map(|p| p.x)
+                .fold(f64::NEG_INFINITY, f64::max);
+            let dist = (near - lc.max.x).max(0.5);
+            out.push(LocalPiece {
+                index: i,
+                vertices,
+                near,
+                far,
+                weight: piece.area / (dist * dist),
+            });
+        }
+        out.sort_by(|a, b| b.weight.total_cmp(&a.weight).then(a.index.cmp(&b.index)));
+        out.truncate(self.params.max_occluders);
+        out
+    }
+
+    /// §6.1 "Choice of the projection plane": a candidate plane just behind each
+    /// occluder, scored by the fraction of its pixels the Projections and slices fill.
+    /// The best `planes_per_direction` candidates are kept, each at least 1.5× nearer
+    /// or farther (from the cell's face) than those already kept: a near plane
+    /// captures slices of the nearby blocks, a far one the umbra of whole rows.
+    pub(crate) fn choose_planes(
+        &self,
+        dir: Direction,
+        lc: &LocalBox,
+        pieces: &[LocalPiece],
+    ) -> Vec<f64> {
+        let scoring: Vec<&LocalPiece> = pieces.iter().take(48).collect();
+        let fars: Vec<f64> = scoring.iter().map(|p| p.far + 1e-3).collect();
+        let cands = candidate_positions(&fars, self.params.plane_candidates);
+        let mut scored: Vec<(f64, f64)> = Vec::new();
+        for x in cands {
+            let plane = Plane::new(dir, lc, x, self.params.resolution_px, self.params.extension);
+            let mut filled = 0.0;
+            for p in &scoring {
+                if let Some((poly, _)) = extended_projection(&p.vertices, lc, x) {
+                    filled += polygon_area(&poly).abs();
+                }
+                if p.near < x && x < p.far {
+                    if let Some(s) = self.occluders.pieces[p.index as usize]
+                        .occluder
+                        .slice(dir, x)
+                    {
+                        filled += polygon_area(&s).abs();
+                    }
+                }
+            }
+            let score = filled / plane.rect.size().x / plane.rect.size().y;
+            if score > 0.0 {
+                scored.push((x, score));
+            }
+        }
+        scored.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.total_cmp(&b.0)));
+        let mut kept: Vec<f64> = Vec::new();
+        for (x, _) in scored {
+            if kept.len() >= self.params.planes_per_direction {
+                break;
+            }
+            let d = x - lc.max.x;
+            if kept.iter().all(|k| {
+                let dk = k - lc.max.x;
+                d > 1.5 * dk || dk > 1.5 * d
+            }) {
+                kept.push(x);
+            }
+        }
+        kept
+    }
+
+    /// Draw the Projections (and slices) of `pieces` on `plane` into a depth map.
+    pub(crate) fn depth_map(
+        &self,
+        plane: &Plane,
+        lc: &LocalBox,
+        pieces: &[LocalPiece],
+    ) -> DepthMap {
+        let mut b = CoverageBuilder::new(plane.n);
+        for p in pieces {
+            if let Some((poly, depth)) = extended_projection(&p.vertices, lc, plane.x) {
+                let px: Vec<DVec2> = poly.iter().map(|q| plane.to_px(*q)).collect();
+                b.add_convex(&px, depth_up(depth));
+            }
+            if p.near < plane.x && plane.x < p.far {
+                if let Some(s) = self.occluders.pieces[p.index as usize]
+                    .occluder
+                    .slice(plane.dir, plane.x)
+                {
+                    let px: Vec<DVec2> = s.iter().map(|q| plane.to_px(*q)).collect();
+                    b.add_convex(&px, 0.0);
+                }
+            }
+        }
+        b.finish()
+    }
+
+    /// The six (or fewer) depth-mapped planes of `cell` (§6.1).
+    pub fn plane_maps(&self, cell: &ViewCell) -> Vec<PlaneMap> {
+        let ids = self.occluders.relevant(&cell.aabb());
+        let mut maps = Vec::new();
+        for dir in Direction::ALL {
+            let lc = dir.box_to_local(cell.min, cell.max);
+            let pieces = self.local_pieces(cell, dir, &ids);
+            if pieces.is_empty() {
+                continue;
+            }
+            for x in self.choose_planes(dir, &lc, &pieces) {
+                let plane = Plane::new(
+                    dir,
+                    &lc,
+                    x,
+                    self.params.resolution_px,
+                    self.params.extension,
+                );
+                let map = self.depth_map(&plane, &lc, &pieces);
+                maps.push(PlaneMap {
+                    plane,
+                    cell: lc,
+                    map,
+                });
+            }
+        }
+        maps
+    }
+
+    /// Whether a box is hidden on some plane; boxes that fail are split along their
+    /// longest axis and both halves tried (hierarchical occludee test).
+    pub fn box_hidden(
+        &self,
+        b: &Aabb3,
+        maps: &[PlaneMap],
+        extra: &dyn Fn(&Aabb3) -> bool,
+        splits: u32,
+    ) -> bool {
+        if maps.iter().any(|m| m.hides(b, self.params.improved)) || extra(b) {
+            return true;
+        }
+        if splits == 0 {
+            return false;
+        }
+        let s = b.size();
+        let axis = if s.x >= s.y && s.x >= s.z {
+            0
+        } else if s.y >= s.z {
+            1
+        } else {
+            2
+        };
+        let mid = 0.5 * (b.min[axis] + b.max[axis]);
+        let (mut lo, mut hi) = (*b, *b);
+        lo.max[axis] = mid;
+        hi.min[axis] = mid;
+        self.box_hidden(&lo, maps, extra, splits - 1)
+            && self.box_hidden(&hi, maps, extra, splits - 1)
+    }
+
+    /// PVS of `cell` restricted to `candidates` (sorted object ids).
+    pub fn pvs_among(&self, cell: &ViewCell, candidates: &[u32]) -> Vec<u32> {
+        let maps = self.plane_maps(cell);
+        let sweep = if self.params.sweep {
+            sweep::Sweep::run(self, cell)
+        } else {
+            sweep::Sweep::empty()
+        };
+        let extra = |b: &Aabb3| sweep.hides(b);
+        candidates
+            .iter()
+            .copied()
+            .filter(|&id| {
+                !self.boxes[id as usize]
+                    .iter()
+                    .all(|b| self.box_hidden(b, &maps, &extra, self.params.occludee_splits))
+            })
+            .collect()
+    }
+}
+
+impl VisibilityMethod for ExtProj {
+    fn name(&self) -> &'static str {
+        "ext-proj"
+    }
+
+    fn params(&self) -> Vec<(String, String)> {
+        let p = &self.params;
+        let mut v = vec![
+            ("resolution".to_string(), p.resolution_px.to_string()),
+            ("improved".to_string(), p.improved.to_string()),
+            ("extension".to_string(), p.extension.to_string()),
+            (
+                "planes_per_direction".to_string(),
+                p.planes_per_direction.to_string(),
+            ),
+            ("sweep".to_string(), p.sweep.to_string()),
+        ];
+        if p.sweep {
+            v.push(("planes".to_string(), p.sweep_planes.to_string()));
+            v.push(("kernel".to_string(), p.kernel_px.to_string()));
+        }
+        if let Some(b) = p.adaptive_budget {
+            v.push(("adaptive_budget".to_string(), b.to_string()));
+        }
+        v
+    }
+
+    fn pvs(&self, cell: &ViewCell) -> Result<Vec<u32>, MethodError> {
+        if !cell.min.is_finite() || !cell.max.is_finite() {
+            return Err(MethodError::BadCell(cell.to_string()));
+        }
+        let all: Vec<u32> = (0..self.scene.objects.len() as u32).collect();
+        Ok(match self.params.adaptive_budget {
+            Some(budget) => adaptive::pvs(self, cell, &all, budget),
+            None => self.pvs_among(cell, &all),
+        })
+    }
+}

@@ -1,0 +1,306 @@
+//! Occluder reprojection and the occlusion sweep (Durand et al. 2000, §5, App. B).
+//!
+//! The cell is swept by parallel planes leaving it. On each plane the *occlusion map*
+//! (black = in the umbra of the occluders in front of the plane) is
+//! * the previous plane's map **re-projected**: the black pixels of a plane behind the
+//!   occluders lie in their umbra and form one planar equivalent occluder (App. B,
+//!   Property 3); its umbra on the next plane, seen from the *equivalent planar cell*
+//!   `E` (the rectangle on the cell's far-face plane crossed by every ray from the
+//!   cell to the next plane's rectangle, Fig. 11c), is the convolution of the map by
+//!   the inverse image of `E`, keeping only fully black pixels (§5.1). We evaluate it
+//!   exactly per pixel: pixel `Q` of the new plane is black iff the rectangle
+//!   `a·Q + (1−a)·E` (`a = d₁/d₂`, Thales) touches only black pixels of the old map —
+//!   the over-estimated kernel of the paper, computed with a summed-area table;
+//! * plus the Projections of the occluders lying between the two planes, including
+//!   every mesh triangle (the leaves: each alone hides almost nothing, but their
+//!   Projections fuse in the union-aware coverage and then in the re-projected map);
+//! * plus the slices of the prisms cut by the plane (§3.3).
+//!
+//! Planes are spaced by `ΔD = D(K−1)P/(CN)` (§5.2: `D` distance from the equivalent
+//! cell, `C` its size, `P` the plane's size, `N` the resolution, `K = 5` the kernel
+//! in pixels) from just behind the nearest occluder; the sweep stops after the
+//! requested number of planes (denser near the cell, where occlusion varies fastest).
+//! Occludees behind a plane are hidden when their Projection (supporting lines,
+//! §3.1) covers only black pixels: black pixels have depth ≤ 0 by construction.
+
+use super::depth_map::{pixel_range, CoverageBuilder, OcclusionMap};
+use super::planes::{Direction, LocalBox, Plane};
+use super::projection::{extended_projection, FACE_CLEARANCE_M};
+use super::{occludee::occludee_projection, ExtProj};
+use sightline_geom::{Aabb3, DVec2, DVec3, ViewCell};
+
+/// How far beyond the cell the sweep reaches at most (m).
+pub const MAX_REACH_M: f64 = 400.0;
+
+/// One plane of the sweep with its occlusion map.
+pub struct SweepPlane {
+    pub plane: Plane,
+    pub cell: LocalBox,
+    pub umbra: OcclusionMap,
+}
+
+/// The sweep planes of all six directions of one cell.
+pub struct Sweep {
+    pub planes: Vec<SweepPlane>,
+}
+
+struct LocalOccluder {
+    vertices: Vec<DVec3>,
+    near: f64,
+    far: f64,
+    /// Extent in u and v.
+    ext: DVec2,
+    /// Index of a prism piece (sliced), or None for a triangle.
+    piece: Option<u32>,
+}
+
+impl Sweep {
+    pub fn empty() -> Self {
+        Sweep { planes: vec![] }
+    }
+
+    /// Whether an occludee box is hidden on some sweep plane it lies behind.
+    pub fn hides(&self, b: &Aabb3) -> bool {
+        self.planes.iter().any(|sp| {
+            let occ = sp.plane.dir.box_to_local(b.min, b.max);
+            if occ.min.x <= sp.plane.x {
+                return false;
+            }
+            let Some((rect, _)) = occludee_projection(&sp.cell, &occ, sp.plane.x, false) else {
+                return false;
+            };
+            let (lo, hi) = (sp.plane.to_px(rect.min), sp.plane.to_px(rect.max));
+            pixel_range(lo, hi, sp.umbra.n).is_some_and(|r| sp.umbra.all_black(r))
+        })
+    }
+
+    /// Run the sweep in the six directions of `cell`.
+    pub fn run(ext: &ExtProj, cell: &ViewCell) -> Sweep {
+        let ids = ext.occluders.relevant(&cell.aabb());
+        let reach = cell.aabb();
+        let reach = Aabb3::new(
+            reach.min - DVec3::splat(MAX_REACH_M),
+            reach.max + DVec3::splat(MAX_REACH_M),
+        );
+        let tri_ids = ext.occluders.triangles_in(&reach);
+        let mut planes = Vec::new();
+        for dir in Direction::ALL {
+            planes.extend(sweep_direction(ext, cell, dir, &ids, &tri_ids));
+        }
+        Sweep { planes }
+    }
+}
+
+/// Depths (local `w`) of at most `k` sweep planes from `x0`, spaced as in §5.2, not
+/// beyond `x1`.
+pub fn plane_positions(ext: &ExtProj, lc: &LocalBox, x0: f64, x1: f64, k: usize) -> Vec<f64> {
+    if k == 0 || !(x1 > x0) {
+        return vec![];
+    }
+    let n = ext.params.resolution_px as f64;
+    let kk = ext.params.kernel_px.max(2) as f64;
+    let step = |x: f64| -> f64 {
+        let plane = Plane::new(Direction::PosX, lc, x, 1, ext.params.extension);
+        let e = equivalent_cell(lc, &plane);
+        let c = e.size().max_element().max(1e-3);
+        let p = plane.rect.size().max_element();
+        let d = x - lc.max.x;
+        d * (kk - 1.0) * p / (c * n)
+    };
+    // The paper's spacing from the first plane on; the sweep stops after k planes
+    // (occludees beyond the last plane are tested against its map).
+    let mut v = vec![x0];
+    while v.len() < k {
+        let x = v[v.len() - 1];
+        let next = x + step(x).max(1e-3);
+        if next > x1 {
+            break;
+        }
+        v.push(next);
+    }
+    v
+}
+
+/// The equivalent planar cell of §5.1 on the cell's far-face plane `w = cw1`: every
+/// ray from the cell to the plane's rectangle crosses it.
+pub fn equivalent_cell(lc: &LocalBox, plane: &Plane) -> sightline_geom::Aabb2 {
+    let t = (lc.max.x - lc.min.x) / (plane.x - lc.min.x);
+    let (r0, r1) = (plane.rect.min, plane.rect.max);
+    let c0 = DVec2::new(lc.min.y, lc.min.z);
+    let c1 = DVec2::new(lc.max.y, lc.max.z);
+    sightline_geom::Aabb2::new(
+        c0.min(c0 * (1.0 - t) + r0 * t),
+        c1.max(c1 * (1.0 - t) + r1 * t),
+    )
+}
+
+/// Re-project the occlusion map of `from` onto `to` (§5.1).
+pub fn reproject(lc: &LocalBox, from: &Plane, map: &OcclusionMap, to: &Plane) -> Vec<bool> {
+    let n = to.n;
+    let mut out = vec![false; n * n];
+    if map.count() == 0 {
+        return out;
+    }
+    let e = equivalent_cell(lc, to);
+    let a = (from.x - lc.max.x) / (to.x - lc.max.x);
+    let ps = to.pixel_size();
+    for j in 0..n {
+        for i in 0..n {
+            let q0 = to.rect.min + DVec2::new(i as f64, j as f64) * ps;
+            let q1 = q0 + ps;
+            let lo = q0 * a + e.min * (1.0 - a);
+            let hi = q1 * a + e.max * (1.0 - a);
+            let (plo, phi) = (from.to_px(lo), from.to_px(hi));
+            if let Some(r) = pixel_range(plo, phi, map.n) {
+                out[j * n + i] = map.all_black(r);
+            }
+        }
+    }
+    out
+}
+
+fn sweep_direction(
+    ext: &ExtProj,
+    cell: &ViewCell,
+    dir: Direction,
+    ids: &[u32],
+    tri_ids: &[u32],
+) -> Vec<SweepPlane> {
+    let lc = dir.box_to_local(cell.min, cell.max);
+    let w_min = lc.max.x + FACE_CLEARANCE_M;
+    let mut occ: Vec<LocalOccluder> = Vec::new();
+    let mut push = |vertices: Vec<DVec3>, piece: Option<u32>| {
+        if vertices.len() < 3 {
+            return;
+        }
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        for p in &vertices {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        if lo.x - lc.max.x > MAX_REACH_M {
+            return;
+        }
+        occ.push(LocalOccluder {
+            vertices,
+            near: lo.x,
+            far: hi.x,
+            ext: DVec2::new(hi.y - lo.y, hi.z - lo.z),
+            piece,
+        });
+    };
+    for p in ext.local_pieces(cell, dir, ids) {
+        push(p.vertices, Some(p.index));
+    }
+    for &t in tri_ids {
+        let tri = &ext.occluders.triangles[t as usize];
+        let lb = dir.box_to_local(tri.bounds.min, tri.bounds.max);
+        if lb.max.x <= w_min {
+            continue;
+        }
+        push(tri.occluder.local_vertices(dir, w_min), None);
+    }
+    if occ.is_empty() {
+        return vec![];
+    }
+    let mut fars: Vec<f64> = occ.iter().map(|o| o.far).collect();
+    fars.sort_by(f64::total_cmp);
+    let x0 = (fars[0] + 1e-3).max(lc.max.x + 0.5);
+    let x1 = fars[fars.len() - 1] + 1e-3;
+    let xs = plane_positions(ext, &lc, x0, x1.max(x0 + 1.0), ext.params.sweep_planes);
+    let n = ext.params.resolution_px;
+    let cell_size = DVec2::new(lc.max.y - lc.min.y, lc.max.z - lc.min.z);
+    let mut out: Vec<SweepPlane> = Vec::with_capacity(xs.len());
+    for &x in &xs {
+        let plane = Plane::new(dir, &lc, x, n, ext.params.extension);
+        let ps = plane.pixel_size();
+        let mut b = CoverageBuilder::new(n);
+        for o in &occ {
+            // Every occluder in front of the plane is projected unless its Projection
+            // is provably void (most leaves far in front of it).
+            if o.far <= x && !void_projection(o, &lc, cell_size, x, ps) {
+                if let Some((poly, _)) = extended_projection(&o.vertices, &lc, x) {
+                    let px: Vec<DVec2> = poly.iter().map(|q| plane.to_px(*q)).collect();
+                    b.add_convex(&px, 0.0);
+                }
+            }
+            if let Some(pi) = o.piece {
+                if o.near < x && x < o.far {
+                    if let Some(s) = ext.occluders.pieces[pi as usize].occluder.slice(dir, x) {
+                        let px: Vec<DVec2> = s.iter().map(|q| plane.to_px(*q)).collect();
+                        b.add_convex(&px, 0.0);
+                    }
+                }
+            }
+        }
+        let drawn = b.finish();
+        let mut black: Vec<bool> = match out.last() {
+            Some(prev) => reproject(&lc, &prev.plane, &prev.umbra, &plane),
+            None => vec![false; n * n],
+        };
+        for j in 0..n {
+            for i in 0..n {
+                if drawn.at(i, j).is_finite() {
+                    black[j * n + i] = true;
+                }
+            }
+        }
+        out.push(SweepPlane {
+            plane,
+            cell: lc,
+            umbra: OcclusionMap::new(n, black),
+        });
+    }
+    out.retain(|p| p.umbra.count() > 0);
+    out
+}
+
+/// A cheap proof that an occluder's Projection on `w = x` covers no full pixel: its
+/// views from two cell corners are shifted by more than its projected width, or its
+/// projected width is below a pixel (skipping an occluder is always conservative).
+fn void_projection(o: &LocalOccluder, lc: &LocalBox, cell: DVec2, x: f64, ps: DVec2) -> bool {
+    let near = (o.near - lc.max.x).max(1e-9);
+    let scale = (x - lc.min.x) / near; // largest magnification of a view
+    let width = o.ext * scale;
+    let shift = cell * ((x - o.far) / (o.far - lc.min.x)).max(0.0);
+    let _ = ps;
+    width.x <= shift.x || width.y <= shift.y
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn equivalent_cell_contains_the_face_and_grows() {
+        let lc = Direction::PosX.box_to_local(DVec3::ZERO, DVec3::new(10.0, 10.0, 2.0));
+        let plane = Plane::new(Direction::PosX, &lc, 30.0, 64, 1.5);
+        let e = equivalent_cell(&lc, &plane);
+        assert!(e.min.x <= 0.0 && e.max.x >= 10.0 && e.min.y <= 0.0 && e.max.y >= 2.0);
+        assert!(e.size().x > 10.0);
+    }
+
+    /// A fully black map stays black inside when re-projected, and its border erodes.
+    #[test]
+    fn reprojection_erodes_by_the_kernel() {
+        let lc = Direction::PosX.box_to_local(DVec3::ZERO, DVec3::new(2.0, 2.0, 2.0));
+        let from = Plane::new(Direction::PosX, &lc, 10.0, 32, 1.0);
+        let to = Plane::new(Direction::PosX, &lc, 12.0, 32, 1.0);
+        let n = 32;
+        let mut black = vec![false; n * n];
+        for j in 4..28 {
+            for i in 4..28 {
+                black[j * n + i] = true;
+            }
+        }
+        let m = OcclusionMap::new(n, black);
+        let r = reproject(&lc, &from, &m, &to);
+        let count = r.iter().filter(|b| **b).count();
+        assert!(count > 0 && count < 24 * 24, "{count}");
+        // The centre stays black.
+        assert!(r[16 * n + 16]);
+        // Nothing black outside the image of the black square.
+        assert!(!r[0]);
+    }
+}

@@ -1,0 +1,179 @@
+//! `ext-proj` on hand-checked fixture scenes (ericw-tools style): every fact is named,
+//! and every PVS must contain the sampled visible set (conservativeness).
+
+mod ext_proj_common;
+
+use ext_proj_common::{missed, sampled_visible};
+use sightline_geom::{DVec2, Polygon, ViewCell};
+use sightline_methods::ext_proj::{ExtProj, Params};
+use sightline_methods::{create, MethodOptions, VisibilityMethod};
+use sightline_scene::{Object, Scene};
+use std::sync::Arc;
+
+fn block(x0: f64, y0: f64, x1: f64, y1: f64, h: f64) -> Object {
+    Object::block(
+        None,
+        Polygon::rect(DVec2::new(x0, y0), DVec2::new(x1, y1)),
+        0.0,
+        h,
+    )
+}
+
+fn cell(s: &str) -> ViewCell {
+    s.parse().expect("fixture cell")
+}
+
+fn pvs(scene: &Arc<Scene>, c: &ViewCell, params: Params) -> Vec<u32> {
+    ExtProj::new(scene.clone(), params).pvs(c).expect("pvs")
+}
+
+fn assert_conservative(scene: &Arc<Scene>, c: &ViewCell, p: &[u32]) {
+    let vs = sampled_visible(scene, c, 3, 4);
+    let m = missed(&vs, p);
+    assert!(
+        m.is_empty(),
+        "missed {m:?} (pvs {p:?}, sampled {vs:?}) from {c}"
+    );
+}
+
+/// Wall 40 m wide and 10 m high at x = 20..21; a low building hides behind it, a
+/// 60 m tower rises behind it.
+fn wall_scene() -> Arc<Scene> {
+    Arc::new(Scene::from_objects(vec![
+        block(20.0, -20.0, 21.0, 20.0, 10.0), // 0 wall
+        block(30.0, -5.0, 40.0, 5.0, 6.0),    // 1 low building behind
+        block(45.0, -5.0, 55.0, 5.0, 60.0),   // 2 tower behind
+        block(-30.0, -5.0, -20.0, 5.0, 6.0),  // 3 in the open, behind the cell
+    ]))
+}
+
+#[test]
+fn wall_hides_the_low_building_but_not_the_tower() {
+    let scene = wall_scene();
+    let c = cell("0,-2,1.5,4,2,2");
+    let p = pvs(&scene, &c, Params::default());
+    assert!(p.contains(&0), "the wall is visible");
+    assert!(
+        !p.contains(&1),
+        "the low building behind the wall is hidden: {p:?}"
+    );
+    assert!(p.contains(&2), "the tower behind the wall is visible");
+    assert!(p.contains(&3), "the building in the open is visible");
+    assert_conservative(&scene, &c, &p);
+}
+
+#[test]
+fn method_is_created_by_name_and_records_its_parameters() {
+    let scene = wall_scene();
+    let m = create("ext-proj", scene.clone(), &MethodOptions::default()).expect("create");
+    assert_eq!(m.name(), "ext-proj");
+    assert!(m.is_conservative());
+    assert!(m
+        .params()
+        .iter()
+        .any(|(k, v)| k == "resolution" && v == "256"));
+    let c = cell("0,-2,1.5,4,2,2");
+    assert_eq!(m.pvs(&c).expect("pvs"), pvs(&scene, &c, Params::default()));
+}
+
+/// A row of touching buildings fuses into one wall (NOTES §1): what stands behind the
+/// row is hidden, although no single building of the row hides it.
+#[test]
+fn touching_buildings_fuse_into_one_occluder() {
+    let mut objs: Vec<Object> = (0..8)
+        .map(|i| {
+            let y = -20.0 + 5.0 * i as f64;
+            block(20.0, y, 28.0, y + 5.0, 12.0 + (i % 3) as f64)
+        })
+        .collect();
+    objs.push(block(35.0, -4.0, 45.0, 4.0, 8.0)); // 8 behind the row
+    let scene = Arc::new(Scene::from_objects(objs));
+    let c = cell("0,-3,1.5,6,3,2");
+    let p = pvs(&scene, &c, Params::default());
+    assert!(!p.contains(&8), "hidden behind the fused row: {p:?}");
+    assert_conservative(&scene, &c, &p);
+}
+
+/// A 1 m slit between two walls: the building seen through it must stay visible.
+#[test]
+fn one_metre_slit_keeps_what_is_behind_visible() {
+    let scene = Arc::new(Scene::from_objects(vec![
+        block(20.0, -20.0, 21.0, -0.5, 10.0), // 0
+        block(20.0, 0.5, 21.0, 20.0, 10.0),   // 1
+        block(40.0, -1.0, 42.0, 1.0, 5.0),    // 2 seen through the slit
+        block(40.0, 10.0, 45.0, 15.0, 5.0),   // 3 hidden off-axis
+    ]));
+    let c = cell("0,-1,1.5,2,1,2");
+    let p = pvs(&scene, &c, Params::default());
+    assert!(p.contains(&2), "visible through the slit: {p:?}");
+    assert!(
+        !p.contains(&3),
+        "off-axis building behind the wall is hidden: {p:?}"
+    );
+    assert_conservative(&scene, &c, &p);
+}
+
+/// A courtyard building: from inside the courtyard only the courtyard walls are seen.
+#[test]
+fn courtyard_hides_the_outside() {
+    let mut ring = Polygon::rect(DVec2::new(-30.0, -30.0), DVec2::new(30.0, 30.0));
+    ring.holes
+        .push(Polygon::rect(DVec2::new(-10.0, -10.0), DVec2::new(10.0, 10.0)).exterior);
+    let scene = Arc::new(Scene::from_objects(vec![
+        Object::block(None, ring, 0.0, 15.0), // 0 the courtyard building
+        block(40.0, -5.0, 50.0, 5.0, 10.0),   // 1 outside, lower
+        block(-5.0, 40.0, 5.0, 50.0, 60.0),   // 2 outside, a tall tower
+    ]));
+    let c = cell("-3,-3,1.5,3,3,2");
+    let p = pvs(&scene, &c, Params::default());
+    assert!(p.contains(&0));
+    assert!(
+        !p.contains(&1),
+        "outside building hidden by the courtyard: {p:?}"
+    );
+    assert!(p.contains(&2), "the tower rises above the courtyard");
+    assert_conservative(&scene, &c, &p);
+}
+
+/// A cell that touches and one that overlaps a facade: the building itself and what
+/// is visible along the street stay in the PVS.
+#[test]
+fn cells_touching_and_overlapping_a_facade() {
+    let scene = Arc::new(Scene::from_objects(vec![
+        block(0.0, 10.0, 50.0, 20.0, 12.0), // 0 facade along the street at y = 10
+        block(0.0, -20.0, 50.0, -5.0, 12.0), // 1 other side of the street
+        block(60.0, 0.0, 70.0, 8.0, 6.0),   // 2 down the street, in view
+        block(10.0, 25.0, 20.0, 35.0, 8.0), // 3 behind the facade
+    ]));
+    for s in ["10,0,1.5,20,10,2", "10,2,1.5,20,12,2"] {
+        let c = cell(s);
+        let p = pvs(&scene, &c, Params::default());
+        assert!(
+            p.contains(&0) && p.contains(&1) && p.contains(&2),
+            "{s}: {p:?}"
+        );
+        assert_conservative(&scene, &c, &p);
+    }
+    let p = pvs(&scene, &cell("10,0,1.5,20,10,2"), Params::default());
+    assert!(!p.contains(&3), "behind the facade, from the street: {p:?}");
+}
+
+/// The improved projection (§4) never loses objects and never enlarges the PVS.
+#[test]
+fn improved_projection_is_no_larger() {
+    let scene = wall_scene();
+    for s in ["0,-2,1.5,4,2,2", "-10,-10,1.5,10,10,2"] {
+        let c = cell(s);
+        let plain = pvs(
+            &scene,
+            &c,
+            Params {
+                improved: false,
+                ..Params::default()
+            },
+        );
+        let imp = pvs(&scene, &c, Params::default());
+        assert!(imp.iter().all(|i| plain.contains(i)), "{imp:?} ⊄ {plain:?}");
+        assert_conservative(&scene, &c, &imp);
+    }
+}
