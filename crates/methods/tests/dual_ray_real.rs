@@ -100,10 +100,10 @@ fn check_scene(name: &str, cells: usize) {
 
 #[test]
 fn lyon_street_cells() {
-    check_scene("lyon1_bdtopo.geojson", 6);
+    check_scene("lyon1_bdtopo.geojson", 4);
 }
 
 #[test]
 fn denhaag_street_cells() {
-    check_scene("denhaag_tile01_lod2.geojson", 6);
+    check_scene("denhaag_tile01_lod2.geojson", 4);
 }
