@@ -746,7 +746,7 @@ fn stratified(lo: DVec3, hi: DVec3, n: usize, rng: &mut SplitMix) -> Vec<DVec3> 
     }
     let mut out: Vec<DVec3> = Vec::with_capacity(pts.len());
     for p in pts {
-        if !out.iter().any(|q| *q == p) {
+        if !out.contains(&p) {
             out.push(p);
         }
     }
