@@ -295,3 +295,44 @@ fn query_answers_json_and_damaged_files_are_one_line_errors() {
         );
     }
 }
+
+#[test]
+fn check_samples_cells_of_a_pvs_file_and_refuses_another_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let (scene, cells) = fixture(dir.path(), 4, 3, 3);
+    let pvs = dir.path().join("city.pvs");
+    ok(sightline(&[
+        "build",
+        s(&scene),
+        "--cells",
+        s(&cells),
+        "--method",
+        "all",
+        "-o",
+        s(&pvs),
+    ]));
+    let out = ok(sightline(&[
+        "check",
+        s(&scene),
+        s(&pvs),
+        "--cells",
+        "2",
+        "--json",
+        "--quiet",
+    ]));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["cells"], 2);
+    assert_eq!(v["missed"], 0);
+    assert_eq!(v["method"], "all");
+
+    let other_dir = dir.path().join("other");
+    std::fs::create_dir(&other_dir).unwrap();
+    let (other, _) = fixture(&other_dir, 5, 3, 3);
+    let out = sightline(&["check", s(&other), s(&pvs), "--cells", "2"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.starts_with("error: ") && err.contains("another scene"),
+        "{err}"
+    );
+}

@@ -5,7 +5,8 @@ use crate::common::{load_scene, print_json, progress};
 use anyhow::{bail, Context};
 use sightline_geom::ViewCell;
 use sightline_methods::check::{check_cells, street_cells, TruthOptions};
-use sightline_methods::{create, MethodOptions};
+use sightline_methods::{create, MethodError, MethodOptions, VisibilityMethod, METHOD_NAMES};
+use sightline_pvs::PvsFile;
 use std::sync::Arc;
 
 /// Side of the cells picked when `--cells` is a number (metres).
@@ -45,27 +46,45 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
     else {
         bail!("internal: `check` called with another command");
     };
-    if let Some(file) = pvs {
-        // The .pvs path (SPEC §5 `check SCENE city.pvs`) belongs to the store.
-        bail!(
-            "checking a .pvs file ({}) is not supported by this build yet; use --method NAME --cells ...",
-            file.display()
-        );
-    }
-    let Some(method) = method else {
-        bail!("check needs --method NAME (or a .pvs file)");
-    };
-    let cells_arg = cells.unwrap_or_else(|| "20".to_string());
     let sc = Arc::new(load_scene(&scene)?);
-    let cells = read_cells(&cells_arg, &sc)?;
-    let m = create(
-        &method,
-        sc.clone(),
-        &MethodOptions {
-            resolution_px: resolution,
-            ..MethodOptions::default()
-        },
-    )?;
+    let (m, cells): (Box<dyn VisibilityMethod>, Vec<ViewCell>) = if let Some(file) = pvs {
+        // `check SCENE city.pvs --cells K`: K cells sampled evenly from the file.
+        let f = PvsFile::open(&file).with_context(|| format!("cannot open {}", file.display()))?;
+        f.check_scene(&sc).with_context(|| {
+            format!(
+                "{} does not belong to {}",
+                file.display(),
+                scene.scene.display()
+            )
+        })?;
+        let stored = f.stored();
+        let k: usize = match cells.as_deref() {
+            None => 20,
+            Some(c) => c.parse().ok().filter(|&k| k > 0).with_context(|| {
+                format!("with a .pvs file, --cells is a number of cells to sample, got '{c}'")
+            })?,
+        };
+        let k = k.min(stored.len());
+        let picked: Vec<ViewCell> = (0..k)
+            .map(|i| f.cells()[stored[i * stored.len() / k] as usize])
+            .collect();
+        (Box::new(StoredPvs(f)), picked)
+    } else {
+        let Some(method) = method else {
+            bail!("check needs --method NAME (or a .pvs file)");
+        };
+        let cells_arg = cells.unwrap_or_else(|| "20".to_string());
+        let cells = read_cells(&cells_arg, &sc)?;
+        let m = create(
+            &method,
+            sc.clone(),
+            &MethodOptions {
+                resolution_px: resolution,
+                ..MethodOptions::default()
+            },
+        )?;
+        (m, cells)
+    };
     let pb = progress(cells.len() as u64, quiet, "checking cells");
     let report = check_cells(&sc, m.as_ref(), &cells, &TruthOptions::default(), &|| {
         pb.inc(1)
@@ -124,4 +143,32 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// A `.pvs` file answering as the method it was built with: the stored set of the cell.
+struct StoredPvs(PvsFile);
+
+impl VisibilityMethod for StoredPvs {
+    fn name(&self) -> &'static str {
+        let m = &self.0.header().method;
+        METHOD_NAMES
+            .iter()
+            .find(|n| **n == m)
+            .copied()
+            .unwrap_or("pvs-file")
+    }
+
+    fn is_conservative(&self) -> bool {
+        self.0.header().method != "sampled"
+    }
+
+    fn pvs(&self, cell: &ViewCell) -> Result<Vec<u32>, MethodError> {
+        let i = self
+            .0
+            .cells()
+            .iter()
+            .position(|c| c == cell)
+            .ok_or_else(|| MethodError::BadCell("not a cell of the .pvs file".into()))?;
+        self.0.pvs(i).map_err(|e| MethodError::Other(e.to_string()))
+    }
 }
