@@ -23,7 +23,9 @@ fn street_cells(scene: &Scene, want: usize) -> Vec<ViewCell> {
             .any(|o| o.inner.iter().any(|pr| pr.footprint.contains(p)))
     };
     let mut out = Vec::new();
-    let step = ((b.size().x * b.size().y) / (want as f64 * 8.0)).sqrt().max(10.0);
+    let step = ((b.size().x * b.size().y) / (want as f64 * 8.0))
+        .sqrt()
+        .max(10.0);
     let mut y = b.min.y + step * 0.5;
     while y < b.max.y {
         let mut x = b.min.x + step * 0.5;
@@ -104,12 +106,20 @@ fn main() {
             .map(|k| {
                 let (i, j) = (3 + (k * 7) % 14, 3 + (k * 5) % 14);
                 let (x, y) = (i as f64 * 5.0 + 2.5, j as f64 * 5.0 + 2.5);
-                ViewCell::new(DVec3::new(x - 0.4, y - 0.4, 1.5), DVec3::new(x + 0.4, y + 0.4, 2.0))
-                    .expect("cell")
+                ViewCell::new(
+                    DVec3::new(x - 0.4, y - 0.4, 1.5),
+                    DVec3::new(x + 0.4, y + 0.4, 2.0),
+                )
+                .expect("cell")
             })
             .collect();
         let tris: usize = scene.objects.iter().map(|o| o.triangle_count()).sum();
-        println!("forest: {} trees, {} triangles, {} cells", scene.objects.len(), tris, cells.len());
+        println!(
+            "forest: {} trees, {} triangles, {} cells",
+            scene.objects.len(),
+            tris,
+            cells.len()
+        );
         for (k, s) in sweep_curve(&scene, &cells, &[1, 5, 15], &Params::default()) {
             println!(
                 "{:>8}  culled objects {:5.1} %  culled triangles {:5.1} %  mean PVS {:6.1}  ms/cell median {:8.1} mean {:8.1}",
