@@ -257,10 +257,19 @@ impl Planar {
         lo_top: f64,
         hi: Rect,
         hi_top: f64,
+        near: Option<f64>,
     ) {
         let ceiling = Ceiling::new(&lo, lo_top, &hi, hi_top);
         let xa = lo.x1;
         let xb = hi.x0;
+        // Occluders gathered only within `near.abs()` of one face (of `lo` when
+        // positive, of `hi` when negative): a subset of the pieces, whose coverage
+        // implies the full one's.
+        let (ga, gb) = match near {
+            Some(d) if d >= 0.0 => (xa, (xa + d).min(xb)),
+            Some(d) => ((xb + d).max(xa), xb),
+            None => (xa, xb),
+        };
         let yc = 0.5 * (lo.y0.min(hi.y0) + lo.y1.max(hi.y1));
         let to_local = |r: &Rect| Rect {
             x0: r.x0 - xa,
@@ -295,10 +304,10 @@ impl Planar {
         let gen = scratch.stamp_gen;
         let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
         let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
-        let (c0, c1) = (g.col(xa), g.col(xb));
+        let (c0, c1) = (g.col(ga), g.col(gb));
         for c in c0..=c1 {
-            let cx0 = (g.origin.x + c as f64 * g.cell_m).max(xa);
-            let cx1 = (g.origin.x + (c + 1) as f64 * g.cell_m).min(xb);
+            let cx0 = (g.origin.x + c as f64 * g.cell_m).max(ga);
+            let cx1 = (g.origin.x + (c + 1) as f64 * g.cell_m).min(gb);
             let ylo = lower(cx0).min(lower(cx1));
             let yhi = upper(cx0).max(upper(cx1));
             let (r0, r1) = (g.row(ylo), g.row(yhi));
@@ -316,8 +325,7 @@ impl Planar {
                         slab,
                         traps,
                         &ceiling,
-                        xa,
-                        xb,
+                        (xa, ga, gb),
                         yc,
                         &lower,
                         &upper,
@@ -404,8 +412,7 @@ fn cut_slab(
     slab: &Slab,
     traps: &[Trap],
     ceiling: &Ceiling,
-    xa: f64,
-    xb: f64,
+    (xa, ga, gb): (f64, f64, f64),
     yc: f64,
     lower: &impl Fn(f64) -> f64,
     upper: &impl Fn(f64) -> f64,
@@ -413,8 +420,8 @@ fn cut_slab(
     kept: &mut Vec<(f64, f64)>,
     out: &mut Vec<Piece>,
 ) {
-    let cx0 = slab.x0.max(xa);
-    let cx1 = slab.x1.min(xb);
+    let cx0 = slab.x0.max(ga);
+    let cx1 = slab.x1.min(gb);
     if cx1 <= cx0 {
         return;
     }
