@@ -9,10 +9,10 @@
 //! Horizontal erosion of a height field is a min-filter, computed exactly by level
 //! sets: for each distinct height `h`, the footprint union `{G ≥ h}` is eroded and
 //! extruded to `h`. Touching buildings are fused first, so a party wall does not
-//! open a gap of the cell's width. Prisms are grouped into *clusters* (connected
-//! components of overlapping bounding boxes): the erosion of a union of far-apart
-//! sets by a connected element is the union of their erosions, so clusters are
-//! eroded independently (and lazily).
+//! open a gap of the cell's width. The plane is cut into square tiles: erosion is
+//! local (a point of `P ⊖ X` only depends on `P` within the element's reach), so
+//! each tile's level sets are clipped to the tile grown by that reach, eroded, and
+//! clipped back — exact inside the tile, computed lazily, and a unit of culling.
 
 use super::erode::{erode, Element, GRID_MARGIN_M};
 use rstar::{RTree, RTreeObject, AABB};
@@ -20,32 +20,37 @@ use sightline_geom::{boolean, Aabb2, DVec2, Polygon};
 use sightline_scene::Scene;
 use std::sync::OnceLock;
 
-/// Occluder heights are rounded down to this step.
-pub const HEIGHT_STEP_M: f64 = 0.25;
+/// Occluder heights are rounded down to this step (inner bound, fewer levels).
+pub const HEIGHT_STEP_M: f64 = 1.0;
+/// Side of the square tiles the eroded height field is computed and culled by.
+pub const TILE_M: f64 = 100.0;
+/// Eroded tiles overlap their neighbours by this much, so that a wall crossing a tile
+/// border is still covered by one piece in most map bins (a seam costs tightness,
+/// never correctness).
+pub const OVERLAP_M: f64 = 4.0;
 
-/// One level set of a cluster: the union of its footprints with height ≥ `h`.
+/// One level set: the union of footprints with height ≥ `h`.
 #[derive(Clone, Debug)]
 pub struct Level {
     pub h: f64,
     pub polys: Vec<Polygon>,
 }
 
-/// A group of touching or nearby occluder prisms, fused.
+/// A square tile of the plane holding some occluders.
 #[derive(Debug)]
-pub struct Cluster {
-    pub bbox: Aabb2,
-    /// Highest level.
-    pub h_max: f64,
-    /// Level sets, highest first (nested: a higher level lies inside the lower ones).
-    pub levels: Vec<Level>,
+pub struct Tile {
+    pub rect: Aabb2,
 }
 
-/// The fused occluder height field of a scene.
+/// The fused occluder height field of a scene: ground-standing inner prisms, indexed.
 #[derive(Debug)]
 pub struct HeightField {
-    pub clusters: Vec<Cluster>,
+    prisms: Vec<(Polygon, f64, Aabb2)>,
+    tree: RTree<Item>,
+    bounds: Aabb2,
 }
 
+#[derive(Debug)]
 struct Item {
     idx: usize,
     bbox: Aabb2,
@@ -61,18 +66,13 @@ impl RTreeObject for Item {
     }
 }
 
-fn find(parent: &mut [usize], mut i: usize) -> usize {
-    while parent[i] != i {
-        parent[i] = parent[parent[i]];
-        i = parent[i];
-    }
-    i
+fn envelope(r: Aabb2) -> AABB<[f64; 2]> {
+    AABB::from_corners([r.min.x, r.min.y], [r.max.x, r.max.y])
 }
 
 impl HeightField {
-    /// Fuse the inner bounds of every object of `scene`.
+    /// Index the inner bounds of every object of `scene`.
     pub fn build(scene: &Scene) -> Self {
-        // Ground-standing inner prisms, heights rounded down.
         let mut prisms: Vec<(Polygon, f64, Aabb2)> = Vec::new();
         for o in &scene.objects {
             for p in &o.inner {
@@ -90,84 +90,33 @@ impl HeightField {
                 prisms.push((p.footprint.clone(), h, bb));
             }
         }
-        // Clusters: connected components of bounding boxes grown by 1 cm.
-        let items: Vec<Item> = prisms
-            .iter()
-            .enumerate()
-            .map(|(idx, p)| Item {
-                idx,
-                bbox: p.2.expand(0.01),
-            })
-            .collect();
-        let mut parent: Vec<usize> = (0..prisms.len()).collect();
         let tree = RTree::bulk_load(
-            items
+            prisms
                 .iter()
-                .map(|i| Item {
-                    idx: i.idx,
-                    bbox: i.bbox,
-                })
+                .enumerate()
+                .map(|(idx, p)| Item { idx, bbox: p.2 })
                 .collect(),
         );
-        for it in &items {
-            for other in tree.locate_in_envelope_intersecting(it.envelope()) {
-                let (a, b) = (find(&mut parent, it.idx), find(&mut parent, other.idx));
-                if a != b {
-                    parent[a.max(b)] = a.min(b);
-                }
-            }
+        let bounds = prisms.iter().fold(Aabb2::EMPTY, |b, p| b.union(p.2));
+        HeightField {
+            prisms,
+            tree,
+            bounds,
         }
-        let mut groups: std::collections::BTreeMap<usize, Vec<usize>> = Default::default();
-        for i in 0..prisms.len() {
-            let r = find(&mut parent, i);
-            groups.entry(r).or_default().push(i);
-        }
-        let clusters = groups
-            .into_values()
-            .map(|members| {
-                let mut heights: Vec<f64> = members.iter().map(|&i| prisms[i].1).collect();
-                heights.sort_by(|a, b| b.total_cmp(a));
-                heights.dedup();
-                let bbox = members
-                    .iter()
-                    .fold(Aabb2::EMPTY, |b, &i| b.union(prisms[i].2));
-                let levels: Vec<Level> = heights
-                    .iter()
-                    .map(|&h| {
-                        let polys: Vec<Polygon> = members
-                            .iter()
-                            .filter(|&&i| prisms[i].1 >= h)
-                            .map(|&i| prisms[i].0.clone())
-                            .collect();
-                        Level {
-                            h,
-                            polys: boolean::union(&polys),
-                        }
-                    })
-                    .filter(|l| !l.polys.is_empty())
-                    .collect();
-                Cluster {
-                    bbox,
-                    h_max: levels.first().map_or(0.0, |l| l.h),
-                    levels,
-                }
-            })
-            .filter(|c| !c.levels.is_empty())
-            .collect();
-        HeightField { clusters }
+    }
+
+    /// Prisms whose bounding box meets `r`.
+    fn near(&self, r: Aabb2) -> impl Iterator<Item = usize> + '_ {
+        self.tree
+            .locate_in_envelope_intersecting(envelope(r))
+            .map(|it| it.idx)
     }
 
     /// Whether some occluder footprint meets the interior of the rectangle `rect`
     /// (conservatively: may answer `true` for a footprint that only comes close).
     pub fn meets_rect(&self, rect: Aabb2) -> bool {
-        self.clusters.iter().any(|c| {
-            c.bbox.intersects(&rect)
-                && c.levels.last().is_some_and(|l| {
-                    l.polys
-                        .iter()
-                        .any(|p| p.bbox().intersects(&rect) && ring_meets_rect(&p.exterior, rect))
-                })
-        })
+        self.near(rect)
+            .any(|i| ring_meets_rect(&self.prisms[i].0.exterior, rect))
     }
 }
 
@@ -177,36 +126,97 @@ fn ring_meets_rect(ring: &[DVec2], rect: Aabb2) -> bool {
     sightline_geom::polygon::ring_signed_area(&clipped).abs() > 1e-9
 }
 
-/// The erosion of every cluster by one element, computed lazily per cluster and shared
-/// by every cell of the same shape (§5.1).
+/// The erosion of the height field by one element, per tile, computed lazily and
+/// shared by every cell of the same shape (§5.1).
 #[derive(Debug)]
 pub struct ErodedField {
     pub element: Element,
     pub half: DVec2,
+    reach: f64,
+    pub tiles: Vec<Tile>,
+    h_max: Vec<OnceLock<f64>>,
     levels: Vec<OnceLock<Vec<Level>>>,
 }
 
 impl ErodedField {
     pub fn new(field: &HeightField, element: Element, half: DVec2) -> Self {
+        let reach = element
+            .vertices(half)
+            .iter()
+            .map(|v| v.length())
+            .fold(0.0, f64::max);
+        // Eroded pieces may lie up to `reach` away from the occluders (an element not
+        // containing the origin translates them): tile the grown bounds.
+        let mut tiles = Vec::new();
+        if !field.bounds.is_empty() {
+            let area = field.bounds.expand(reach + 1.0);
+            let n = (area.size() / TILE_M).ceil().max(DVec2::ONE);
+            for i in 0..n.x as usize {
+                for j in 0..n.y as usize {
+                    let min = area.min + DVec2::new(i as f64, j as f64) * TILE_M;
+                    let rect = Aabb2::new(min, min + DVec2::splat(TILE_M));
+                    let window = rect.expand(OVERLAP_M + reach + 1.0);
+                    if field.near(window).next().is_some() {
+                        tiles.push(Tile { rect });
+                    }
+                }
+            }
+        }
+        let n = tiles.len();
         ErodedField {
             element,
             half,
-            levels: (0..field.clusters.len()).map(|_| OnceLock::new()).collect(),
+            reach,
+            tiles,
+            h_max: (0..n).map(|_| OnceLock::new()).collect(),
+            levels: (0..n).map(|_| OnceLock::new()).collect(),
         }
     }
 
-    /// The eroded levels of cluster `i` (highest first; empty levels dropped).
-    pub fn cluster(&self, field: &HeightField, i: usize) -> &[Level] {
+    /// The region the eroded pieces of tile `i` lie in.
+    pub fn piece_rect(&self, i: usize) -> Aabb2 {
+        self.tiles[i].rect.expand(OVERLAP_M)
+    }
+
+    /// An upper bound of the eroded heights in tile `i`.
+    pub fn h_max(&self, field: &HeightField, i: usize) -> f64 {
+        *self.h_max[i].get_or_init(|| {
+            let r = self.piece_rect(i).expand(self.reach + 1.0);
+            field.near(r).map(|k| field.prisms[k].1).fold(0.0, f64::max)
+        })
+    }
+
+    /// The eroded levels of tile `i`, highest first (empty levels dropped): the
+    /// level sets of the occluders near the tile, clipped to the tile grown by the
+    /// element's reach (the erosion is exact inside the piece rectangle), eroded,
+    /// clipped to the piece rectangle.
+    pub fn tile(&self, field: &HeightField, i: usize) -> &[Level] {
         self.levels[i].get_or_init(|| {
             let x = self.element.vertices(self.half);
-            field.clusters[i]
-                .levels
+            let keep = self.piece_rect(i);
+            let window = keep.expand(self.reach + 1.0);
+            let members: Vec<usize> = field.near(window).collect();
+            let mut heights: Vec<f64> = members.iter().map(|&k| field.prisms[k].1).collect();
+            heights.sort_by(|a, b| b.total_cmp(a));
+            heights.dedup();
+            let window_poly = [Polygon::rect(window.min, window.max)];
+            let keep_poly = [Polygon::rect(keep.min, keep.max)];
+            heights
                 .iter()
-                .map(|l| Level {
-                    h: l.h,
-                    polys: erode(&l.polys, &x, GRID_MARGIN_M),
+                .filter_map(|&h| {
+                    let polys: Vec<Polygon> = members
+                        .iter()
+                        .filter(|&&k| field.prisms[k].1 >= h)
+                        .map(|&k| field.prisms[k].0.clone())
+                        .collect();
+                    let level = boolean::intersection(&polys, &window_poly);
+                    let eroded = erode(&level, &x, GRID_MARGIN_M);
+                    if eroded.is_empty() {
+                        return None;
+                    }
+                    let polys = boolean::intersection(&eroded, &keep_poly);
+                    (!polys.is_empty()).then_some(Level { h, polys })
                 })
-                .filter(|l| !l.polys.is_empty())
                 .collect()
         })
     }

@@ -10,14 +10,14 @@
 //!
 //! Pipeline (one module per concern):
 //! * [`levels`]: the inner bounds of all objects fused into one height field, as level
-//!   sets per cluster of touching buildings (NOTES §1); eroded per structuring element
-//!   and cell *shape*, lazily, cached for every cell of that shape (§5.1).
+//!   sets (NOTES §1) per square tile; eroded per structuring element and cell *shape*,
+//!   lazily per tile, cached for every cell of that shape (§5.1).
 //! * [`erode`]: exact polygon erosion by equation (1) (§4.3), rounded inward.
 //! * [`shrink`]: occludee pieces, the supporting segment of each (§3.3, §5.1), the
 //!   shrunk occludee (§4.4) and the eye raise that makes §3.3 hold in 3D.
 //! * [`occlusion`]: the from-centre test (§5) on a polar occlusion map: inner coverage
 //!   of eroded occluders with farthest depth, occludees with outer coverage and nearest
-//!   depth, front-to-back cluster culling against the map.
+//!   depth, front-to-back tile culling against the map.
 //!
 //! Vertical erosion (§3.4): the occluders united with the ground form a height field
 //! whose columns extend to −∞, so eroding by the cell's height segment only moves
@@ -237,39 +237,33 @@ impl ErosionMethod {
         Some(tests)
     }
 
-    /// Build the occlusion map of `element`: eroded clusters front to back, skipping
-    /// those that cannot add a useful blocker to any needed bin.
+    /// Build the occlusion map of `element`: eroded tiles front to back, skipping
+    /// those that cannot add a useful blocker to any needed bin (hierarchical culling
+    /// against the map, §5.1 / §7 "Scaling").
     fn render(&self, map: &mut PolarMap, element: Element, ctx: &CellCtx) {
         let eroded = self.eroded(element, ctx.half);
-        let reach = element
-            .vertices(ctx.half)
-            .iter()
-            .map(|v| v.length())
-            .fold(0.0, f64::max);
-        let mut order: Vec<(f64, usize)> = self
-            .field
-            .clusters
-            .iter()
-            .enumerate()
-            .filter(|(_, c)| c.h_max > ctx.z1)
-            .map(|(i, c)| (rect_distance(c.bbox.expand(reach), ctx.s), i))
+        let mut order: Vec<(f64, usize)> = (0..eroded.tiles.len())
+            .map(|i| (rect_distance(eroded.piece_rect(i), ctx.s), i))
             .collect();
         order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        for (d, ci) in order {
-            let c = &self.field.clusters[ci];
+        for (d, ti) in order {
+            let h_max = eroded.h_max(&self.field, ti);
+            if h_max <= ctx.z1 {
+                continue;
+            }
             if d > 0.0 {
-                let bb = c.bbox.expand(reach);
+                let bb = eroded.piece_rect(ti);
                 let corners = [
                     bb.min - ctx.s,
                     DVec2::new(bb.max.x, bb.min.y) - ctx.s,
                     bb.max - ctx.s,
                     DVec2::new(bb.min.x, bb.max.y) - ctx.s,
                 ];
-                if !map.could_improve(&corners, d, c.h_max) {
+                if !map.could_improve(&corners, d, h_max) {
                     continue;
                 }
             }
-            for level in eroded.cluster(&self.field, ci) {
+            for level in eroded.tile(&self.field, ti) {
                 if level.h <= ctx.z1 {
                     break;
                 }

@@ -1,0 +1,75 @@
+//! Phase timings of the erosion methods on a scene: `cargo run --release -p
+//! sightline-methods --example erosion_timing -- SCENE [CELL_SIZE] [CELLS]`.
+
+use sightline_geom::{DVec2, ViewCell};
+use sightline_methods::{create, MethodOptions};
+use sightline_scene::import::{load, ImportOptions};
+use std::sync::Arc;
+use std::time::Instant;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let path = args
+        .get(1)
+        .ok_or("usage: erosion_timing SCENE [SIZE] [CELLS]")?;
+    let size: f64 = args.get(2).map_or(Ok(25.0), |s| s.parse())?;
+    let count: usize = args.get(3).map_or(Ok(10), |s| s.parse())?;
+    let t = Instant::now();
+    let scene = Arc::new(load(std::path::Path::new(path), &ImportOptions::default())?);
+    println!(
+        "load {:.2}s, {} objects",
+        t.elapsed().as_secs_f64(),
+        scene.objects.len()
+    );
+    let b = scene.bounds;
+    let c = (b.min.truncate() + b.max.truncate()) * 0.5;
+    let mut cells = Vec::new();
+    let mut k = 0i64;
+    while cells.len() < count && k < 10_000 {
+        let (i, j) = ((k * 7919) % 41 - 20, (k * 104_729) % 41 - 20);
+        k += 1;
+        let p = c + DVec2::new(i as f64, j as f64) * 23.0;
+        let free = !scene
+            .objects
+            .iter()
+            .any(|o| o.inner.iter().any(|pr| pr.footprint.contains(p)));
+        if free {
+            cells.push(ViewCell::from_array([
+                p.x - size / 2.0,
+                p.y - size / 2.0,
+                1.5,
+                p.x + size / 2.0,
+                p.y + size / 2.0,
+                2.0,
+            ])?);
+        }
+    }
+    for m in [
+        "erosion",
+        "erosion-segment",
+        "erosion-cell",
+        "shrink-sphere",
+    ] {
+        let t = Instant::now();
+        let method = create(m, scene.clone(), &MethodOptions::default())?;
+        let prep = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let first = method.pvs(&cells[0])?.len();
+        let first_s = t.elapsed().as_secs_f64();
+        let mut ms = Vec::new();
+        let mut lens = Vec::new();
+        for cell in &cells {
+            let t = Instant::now();
+            lens.push(method.pvs(cell)?.len());
+            ms.push(t.elapsed().as_secs_f64() * 1e3);
+        }
+        ms.sort_by(f64::total_cmp);
+        println!(
+            "{m:16} prepare {prep:.2}s first cell {first_s:.2}s ({first}) median {:.1} ms/cell, max {:.1}; pvs sizes {:?}",
+            ms[ms.len() / 2],
+            ms[ms.len() - 1],
+            lens
+        );
+    }
+    Ok(())
+}
