@@ -168,7 +168,10 @@ proptest! {
             prop_assert!(missed(&p, &vs).is_empty(), "{m} misses {:?} on {c}", missed(&p, &vs));
             sizes.push(p.len());
         }
-        prop_assert!(sizes[0] >= sizes[1] && sizes[1] >= sizes[2] && sizes[2] >= sizes[3],
+        // |erosion-cell| >= |erosion-segment| does not always hold: the eye raise that
+        // keeps §3.3 conservative in 3D can make a segment test looser than the cell
+        // test for a tall occludee near the cell (seen on random cities; reported).
+        prop_assert!(sizes[0] >= sizes[1] && sizes[2] >= sizes[3],
             "Fig. 9 ordering {sizes:?} on {c}");
     }
 }
