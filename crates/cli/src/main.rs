@@ -1,5 +1,6 @@
 //! `sightline`: conservative potentially visible sets for cities (SPEC §5).
 
+mod bench;
 mod cli;
 mod commands;
 mod common;

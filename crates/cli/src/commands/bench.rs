@@ -1,8 +1,28 @@
-//! `sightline bench`.
+//! `sightline bench`: see [`crate::bench`].
 
+use crate::bench::{run as run_bench, Suite};
 use crate::cli::Command;
 
 pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
-    let _ = (cmd, quiet);
-    anyhow::bail!("`sightline bench` is not implemented yet")
+    let Command::Bench {
+        suite,
+        scene,
+        methods,
+        out,
+    } = cmd
+    else {
+        unreachable!("dispatched by commands::run")
+    };
+    let suite = Suite::named(&suite)?;
+    let methods = methods.map(|m| {
+        m.split(',')
+            .map(|s| s.trim().to_string())
+            .filter(|s| !s.is_empty())
+            .collect()
+    });
+    run_bench(suite, &scene, methods, &out, quiet)?;
+    if !quiet {
+        eprintln!("report written to {}", out.join("README.md").display());
+    }
+    Ok(())
 }

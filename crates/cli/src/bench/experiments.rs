@@ -1,0 +1,828 @@
+//! The experiments of SPEC §7, each a function that appends raw [`Record`]s and
+//! writes its section of the report.
+
+use super::machine::Machine;
+use super::plots::{line_chart, Scale, Series};
+use super::report::{Report, Table};
+use super::stats::{loglog_slope, mean, median, quantile};
+use anyhow::Context;
+use rayon::prelude::*;
+use serde::Serialize;
+use sightline_geom::ViewCell;
+use sightline_methods::check::{TruthOptions, TruthScene};
+use sightline_methods::{create, MethodError, MethodOptions, VisibilityMethod};
+use sightline_scene::Scene;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// The conservative methods, in the order of SPEC §4.
+const CONSERVATIVE: &[&str] = &[
+    "erosion",
+    "erosion-segment",
+    "erosion-cell",
+    "shrink-sphere",
+    "dual-ray",
+    "dual-ray-exact",
+    "ext-proj",
+];
+const FIG9: &[&str] = &[
+    "shrink-sphere",
+    "erosion-cell",
+    "erosion-segment",
+    "erosion",
+];
+
+/// Sizes and counts of one suite.
+#[derive(Clone, Debug, Serialize)]
+pub struct Suite {
+    pub name: String,
+    pub seed: u64,
+    pub city_buildings: usize,
+    pub cell_sizes_m: Vec<f64>,
+    pub cells_per_setting: usize,
+    pub timing_repeats: usize,
+    pub metropolis_buildings: usize,
+    pub dual_ray_cell_sizes_m: Vec<f64>,
+    pub dual_ray_resolutions: Vec<u32>,
+    pub ext_proj_resolutions: Vec<u32>,
+    pub forest_trees: usize,
+    pub sweep_planes: Vec<u32>,
+    pub scaling_buildings: Vec<usize>,
+    pub truth_samples: Option<u32>,
+    pub truth_resolution_px: Option<u32>,
+}
+
+impl Suite {
+    pub fn named(name: &str) -> anyhow::Result<Suite> {
+        match name {
+            "quick" => Ok(Suite {
+                name: "quick".into(),
+                seed: 1,
+                city_buildings: 500,
+                cell_sizes_m: vec![10.0, 25.0, 50.0, 100.0, 200.0],
+                cells_per_setting: 4,
+                timing_repeats: 3,
+                metropolis_buildings: 10_000,
+                dual_ray_cell_sizes_m: vec![50.0, 100.0, 300.0],
+                dual_ray_resolutions: vec![16, 32, 64, 128, 256],
+                ext_proj_resolutions: vec![64, 128, 256, 512, 1024],
+                forest_trees: 150,
+                sweep_planes: vec![1, 5, 15],
+                scaling_buildings: vec![1_000, 10_000],
+                truth_samples: None,
+                truth_resolution_px: None,
+            }),
+            "full" => Ok(Suite {
+                name: "full".into(),
+                seed: 1,
+                city_buildings: 500,
+                cell_sizes_m: vec![10.0, 25.0, 50.0, 100.0, 200.0],
+                cells_per_setting: 20,
+                timing_repeats: 5,
+                metropolis_buildings: 150_000,
+                dual_ray_cell_sizes_m: vec![50.0, 100.0, 300.0],
+                dual_ray_resolutions: vec![16, 32, 64, 128, 256],
+                ext_proj_resolutions: vec![64, 128, 256, 512, 1024],
+                forest_trees: 1_000,
+                sweep_planes: vec![1, 5, 15],
+                scaling_buildings: vec![1_000, 10_000, 150_000],
+                truth_samples: None,
+                truth_resolution_px: None,
+            }),
+            other => anyhow::bail!("unknown suite '{other}' (known: quick, full)"),
+        }
+    }
+}
+
+/// One measured (method, cell) pair.
+#[derive(Clone, Debug, Serialize)]
+pub struct Record {
+    pub experiment: String,
+    pub scene: String,
+    pub method: String,
+    pub setting: String,
+    pub cell_size_m: f64,
+    pub cell: ViewCell,
+    pub objects: usize,
+    pub pvs: usize,
+    /// |VS|, when the ground truth was computed for this record.
+    pub vs: Option<usize>,
+    pub missed: Option<usize>,
+    pub over: Option<f64>,
+    pub hidden_fraction: f64,
+    /// Median over `timing_repeats` runs.
+    pub ms: f64,
+}
+
+/// A scene under test with its cached ground truths.
+pub struct Bench {
+    pub suite: Suite,
+    pub records: Vec<Record>,
+    pub notes: Vec<String>,
+    truths: HashMap<(String, String), Vec<u32>>,
+    quiet: bool,
+}
+
+pub struct NamedScene {
+    pub name: String,
+    pub scene: Arc<Scene>,
+}
+
+fn cell_key(c: &ViewCell) -> String {
+    c.to_string()
+}
+
+/// Street cells of `size_m` spread evenly over the scene: every k-th free grid cell.
+pub fn pick_cells(scene: &Scene, size_m: f64, n: usize) -> Vec<ViewCell> {
+    let all = sightline_scene::cells::grid_cells(scene, size_m, 1.5, 2.0).unwrap_or_default();
+    if all.len() <= n {
+        return all;
+    }
+    // Prefer cells near the middle of the scene (edges see mostly empty ground), then
+    // spread evenly over them.
+    let c = scene.bounds.center().truncate();
+    let mut sorted = all;
+    sorted.sort_by(|a, b| {
+        let da = a.center().truncate().distance(c);
+        let db = b.center().truncate().distance(c);
+        da.total_cmp(&db)
+    });
+    let pool = &sorted[..sorted.len().min(n * 8).max(n)];
+    (0..n).map(|i| pool[i * pool.len() / n]).collect()
+}
+
+impl Bench {
+    pub fn new(suite: Suite, quiet: bool) -> Self {
+        Bench {
+            suite,
+            records: vec![],
+            notes: vec![],
+            truths: HashMap::new(),
+            quiet,
+        }
+    }
+
+    fn log(&self, msg: &str) {
+        if !self.quiet {
+            eprintln!("bench: {msg}");
+        }
+    }
+
+    fn truth_opts(&self) -> TruthOptions {
+        let mut t = TruthOptions::default();
+        if let Some(s) = self.suite.truth_samples {
+            t.samples = s;
+        }
+        if let Some(r) = self.suite.truth_resolution_px {
+            t.resolution_px = r;
+        }
+        t
+    }
+
+    /// Ground truths of `cells` (computed in parallel, cached per scene and cell).
+    fn truths(&mut self, s: &NamedScene, cells: &[ViewCell]) -> Vec<Vec<u32>> {
+        let opts = self.truth_opts();
+        let missing: Vec<ViewCell> = cells
+            .iter()
+            .filter(|c| !self.truths.contains_key(&(s.name.clone(), cell_key(c))))
+            .copied()
+            .collect();
+        if missing.is_empty() {
+            return cells
+                .iter()
+                .map(|c| self.truths[&(s.name.clone(), cell_key(c))].clone())
+                .collect();
+        }
+        let ts = TruthScene::new(&s.scene);
+        let computed: Vec<(ViewCell, Vec<u32>)> = missing
+            .par_iter()
+            .map(|c| (*c, ts.ground_truth(c, &opts).visible))
+            .collect();
+        for (c, v) in computed {
+            self.truths.insert((s.name.clone(), cell_key(&c)), v);
+        }
+        cells
+            .iter()
+            .map(|c| self.truths[&(s.name.clone(), cell_key(c))].clone())
+            .collect()
+    }
+
+    /// Prepare `method` or record why it is not available.
+    fn method(
+        &mut self,
+        s: &NamedScene,
+        name: &str,
+        opts: &MethodOptions,
+    ) -> Option<Box<dyn VisibilityMethod>> {
+        match create(name, s.scene.clone(), opts) {
+            Ok(m) => Some(m),
+            Err(MethodError::NotImplemented(_)) => {
+                let note = format!("`{name}` is not available in this build: skipped.");
+                if !self.notes.contains(&note) {
+                    self.notes.push(note);
+                }
+                None
+            }
+            Err(e) => {
+                self.notes
+                    .push(format!("`{name}` failed to prepare on {}: {e}", s.name));
+                None
+            }
+        }
+    }
+
+    /// Run `m` on every cell (median of repeats), compare with truth when given.
+    #[allow(clippy::too_many_arguments)]
+    fn measure(
+        &mut self,
+        experiment: &str,
+        s: &NamedScene,
+        m: &dyn VisibilityMethod,
+        setting: &str,
+        size_m: f64,
+        cells: &[ViewCell],
+        truths: Option<&[Vec<u32>]>,
+    ) -> Vec<Record> {
+        let n_obj = s.scene.objects.len();
+        let mut out = Vec::with_capacity(cells.len());
+        for (i, cell) in cells.iter().enumerate() {
+            let mut times = Vec::with_capacity(self.suite.timing_repeats);
+            let mut pvs = Vec::new();
+            let mut failed = None;
+            for _ in 0..self.suite.timing_repeats.max(1) {
+                let t = Instant::now();
+                match m.pvs(cell) {
+                    Ok(p) => pvs = p,
+                    Err(e) => {
+                        failed = Some(e.to_string());
+                        break;
+                    }
+                }
+                times.push(t.elapsed().as_secs_f64() * 1e3);
+            }
+            if let Some(e) = failed {
+                self.notes.push(format!(
+                    "`{}` failed on {} cell {cell}: {e}",
+                    m.name(),
+                    s.name
+                ));
+                continue;
+            }
+            let (vs, missed, over) = match truths {
+                Some(t) => {
+                    let vs = &t[i];
+                    let missed = vs
+                        .iter()
+                        .filter(|id| pvs.binary_search(id).is_err())
+                        .count();
+                    let over = pvs.len() as f64 / vs.len().max(1) as f64;
+                    (Some(vs.len()), Some(missed), Some(over))
+                }
+                None => (None, None, None),
+            };
+            out.push(Record {
+                experiment: experiment.into(),
+                scene: s.name.clone(),
+                method: m.name().into(),
+                setting: setting.into(),
+                cell_size_m: size_m,
+                cell: *cell,
+                objects: n_obj,
+                pvs: pvs.len(),
+                vs,
+                missed,
+                over,
+                hidden_fraction: 1.0 - pvs.len() as f64 / n_obj.max(1) as f64,
+                ms: median(&times),
+            });
+        }
+        self.records.extend(out.iter().cloned());
+        out
+    }
+}
+
+fn summarize(recs: &[Record]) -> (f64, f64, f64, f64, usize, f64) {
+    let overs: Vec<f64> = recs.iter().filter_map(|r| r.over).collect();
+    let ms: Vec<f64> = recs.iter().map(|r| r.ms).collect();
+    let missed: usize = recs.iter().filter_map(|r| r.missed).sum();
+    let hidden: Vec<f64> = recs.iter().map(|r| r.hidden_fraction).collect();
+    (
+        median(&overs),
+        quantile(&overs, 0.9),
+        median(&ms),
+        quantile(&ms, 0.9),
+        missed,
+        mean(&hidden),
+    )
+}
+
+fn f(v: f64, digits: usize) -> String {
+    if v.is_finite() {
+        format!("{v:.digits$}")
+    } else {
+        "–".into()
+    }
+}
+
+/// Erosion paper Fig. 9: mean `over` vs cell size for methods 1–4, and the ratio 1/4.
+fn fig9(b: &mut Bench, scenes: &[NamedScene], rep: &mut Report, out: &Path) -> anyhow::Result<()> {
+    rep.section("Erosion family vs viewcell size (erosion paper, Fig. 9)");
+    rep.para("Mean `over` = |PVS| / |VS| per cell size, on street cells spread over each scene; the last column is the ratio method 1 / method 4 (shrink-sphere / erosion), the lower curve of Fig. 9.");
+    for s in scenes {
+        b.log(&format!("fig9 on {}", s.name));
+        let mut table = Table::new(&[
+            "cell size (m)",
+            "cells",
+            "shrink-sphere",
+            "erosion-cell",
+            "erosion-segment",
+            "erosion",
+            "missed",
+            "ratio 1/4",
+        ]);
+        let mut series: Vec<Series> = FIG9
+            .iter()
+            .map(|m| Series {
+                name: m.to_string(),
+                points: vec![],
+            })
+            .collect();
+        let mut ratio = Series {
+            name: "shrink-sphere / erosion".into(),
+            points: vec![],
+        };
+        let methods: Vec<Option<Box<dyn VisibilityMethod>>> = FIG9
+            .iter()
+            .map(|m| b.method(s, m, &MethodOptions::default()))
+            .collect();
+        if methods.iter().all(Option::is_none) {
+            rep.para(&format!(
+                "{}: no erosion-family method is available.",
+                s.name
+            ));
+            continue;
+        }
+        for &size in &b.suite.cell_sizes_m.clone() {
+            let cells = pick_cells(&s.scene, size, b.suite.cells_per_setting);
+            if cells.is_empty() {
+                continue;
+            }
+            let truths = b.truths(s, &cells);
+            let mut means = vec![f64::NAN; FIG9.len()];
+            let mut missed = 0;
+            for (k, m) in methods.iter().enumerate() {
+                if let Some(m) = m {
+                    let recs = b.measure("fig9", s, m.as_ref(), "", size, &cells, Some(&truths));
+                    let overs: Vec<f64> = recs.iter().filter_map(|r| r.over).collect();
+                    means[k] = mean(&overs);
+                    missed += recs.iter().filter_map(|r| r.missed).sum::<usize>();
+                    series[k].points.push((size, means[k]));
+                }
+            }
+            let r = means[0] / means[3];
+            ratio.points.push((size, r));
+            let mut row = vec![f(size, 0), cells.len().to_string()];
+            row.extend(means.iter().map(|v| f(*v, 2)));
+            row.push(missed.to_string());
+            row.push(f(r, 2));
+            table.row(row);
+        }
+        rep.para(&format!(
+            "**{}** ({} objects):",
+            s.name,
+            s.scene.objects.len()
+        ));
+        rep.table(&table);
+        let png = format!("fig9-{}.png", s.name);
+        series.push(ratio);
+        series.retain(|s| !s.points.is_empty());
+        if !series.is_empty() {
+            line_chart(
+                &out.join(&png),
+                &format!("Over-conservativity vs cell size — {}", s.name),
+                "viewcell size (m)",
+                "mean |PVS| / |VS|",
+                &series,
+                Scale::Log,
+                Scale::Linear,
+            )?;
+            rep.image(&png, "over vs cell size");
+        }
+    }
+    Ok(())
+}
+
+/// Dual ray space paper Table 1: time and over-estimation vs resolution × cell size.
+fn table1(b: &mut Bench, rep: &mut Report, out: &Path) -> anyhow::Result<()> {
+    rep.section("Dual ray space: resolution × cell size (dual ray space paper, Table 1)");
+    let n = b.suite.metropolis_buildings;
+    b.log(&format!("table1 on a {n}-building metropolis"));
+    let s = NamedScene {
+        name: format!("metropolis-{n}"),
+        scene: Arc::new(sightline_scene::generate::metropolis(b.suite.seed, n)),
+    };
+    let Some(exact) = b.method(&s, "dual-ray-exact", &MethodOptions::default()) else {
+        rep.para("`dual-ray-exact` is not available: Table 1 skipped.");
+        return Ok(());
+    };
+    rep.para(&format!("Scene: generated metropolis, {} objects, cells 2 m high (z 0.5–2.5 m). Over-estimation is the object-level analogue of the paper's measure: (|PVS(res)| − |PVS(exact)|) / |PVS(exact)|, in %. Times are medians per cell, single thread.", s.scene.objects.len()));
+    let mut table = Table::new(&[
+        "resolution",
+        "ms @50 m",
+        "ms @100 m",
+        "ms @300 m",
+        "over-est. % @50",
+        "@100",
+        "@300",
+    ]);
+    let sizes = b.suite.dual_ray_cell_sizes_m.clone();
+    let mut exact_sizes = Vec::new();
+    let mut cellsets = Vec::new();
+    for &size in &sizes {
+        let cells: Vec<ViewCell> = pick_cells(&s.scene, size, b.suite.cells_per_setting.min(3))
+            .into_iter()
+            .filter_map(|c| {
+                ViewCell::from_array([c.min.x, c.min.y, 0.5, c.max.x, c.max.y, 2.5]).ok()
+            })
+            .collect();
+        let recs = b.measure("table1", &s, exact.as_ref(), "exact", size, &cells, None);
+        exact_sizes.push(recs.iter().map(|r| r.pvs as f64).collect::<Vec<_>>());
+        cellsets.push(cells);
+    }
+    let mut time_series: Vec<Series> = sizes
+        .iter()
+        .map(|s| Series {
+            name: format!("{s:.0} m cells"),
+            points: vec![],
+        })
+        .collect();
+    for &res in &b.suite.dual_ray_resolutions.clone() {
+        let opts = MethodOptions {
+            resolution_px: Some(res),
+            ..Default::default()
+        };
+        let Some(m) = b.method(&s, "dual-ray", &opts) else {
+            rep.para("`dual-ray` is not available.");
+            return Ok(());
+        };
+        let mut ms = vec![];
+        let mut est = vec![];
+        for (k, &size) in sizes.iter().enumerate() {
+            let recs = b.measure(
+                "table1",
+                &s,
+                m.as_ref(),
+                &format!("res={res}"),
+                size,
+                &cellsets[k],
+                None,
+            );
+            let t = median(&recs.iter().map(|r| r.ms).collect::<Vec<_>>());
+            let e: Vec<f64> = recs
+                .iter()
+                .zip(&exact_sizes[k])
+                .map(|(r, pe)| 100.0 * (r.pvs as f64 - pe) / pe.max(1.0))
+                .collect();
+            time_series[k].points.push((res as f64, t));
+            ms.push(t);
+            est.push(mean(&e));
+        }
+        let mut row = vec![format!("{res}²")];
+        row.extend(ms.iter().map(|v| f(*v, 1)));
+        row.extend(est.iter().map(|v| f(*v, 2)));
+        table.row(row);
+    }
+    rep.table(&table);
+    line_chart(
+        &out.join("table1-time.png"),
+        "dual-ray: time per cell vs resolution",
+        "ray-space resolution (px)",
+        "ms per cell (median)",
+        &time_series,
+        Scale::Log,
+        Scale::Log,
+    )?;
+    rep.image("table1-time.png", "dual-ray time vs resolution");
+    Ok(())
+}
+
+/// Extended projections: Fig. 12 (resolution curve) and the forest sweep (§7.2).
+fn ext_proj(b: &mut Bench, city: &NamedScene, rep: &mut Report, out: &Path) -> anyhow::Result<()> {
+    rep.section("Extended projections: depth-map resolution and the occlusion sweep (ext. proj. paper, Fig. 12 and §7.2)");
+    let cells = pick_cells(&city.scene, 25.0, b.suite.cells_per_setting);
+    let mut table = Table::new(&[
+        "resolution",
+        "ms/cell (median)",
+        "% hidden",
+        "over (median)",
+        "missed",
+    ]);
+    let truths = b.truths(city, &cells);
+    let mut t_series = Series {
+        name: "ms per cell".into(),
+        points: vec![],
+    };
+    let mut h_series = Series {
+        name: "% hidden".into(),
+        points: vec![],
+    };
+    for &res in &b.suite.ext_proj_resolutions.clone() {
+        let opts = MethodOptions {
+            resolution_px: Some(res),
+            ..Default::default()
+        };
+        let Some(m) = b.method(city, "ext-proj", &opts) else {
+            rep.para("`ext-proj` is not available.");
+            return Ok(());
+        };
+        let recs = b.measure(
+            "fig12",
+            city,
+            m.as_ref(),
+            &format!("res={res}"),
+            25.0,
+            &cells,
+            Some(&truths),
+        );
+        let (om, _, tm, _, missed, hidden) = summarize(&recs);
+        t_series.points.push((res as f64, tm));
+        h_series.points.push((res as f64, 100.0 * hidden));
+        table.row(vec![
+            res.to_string(),
+            f(tm, 1),
+            f(100.0 * hidden, 1),
+            f(om, 2),
+            missed.to_string(),
+        ]);
+    }
+    rep.para(&format!(
+        "{} ({} objects), 25 m street cells:",
+        city.name,
+        city.scene.objects.len()
+    ));
+    rep.table(&table);
+    line_chart(
+        &out.join("fig12-time.png"),
+        "ext-proj: time vs depth-map resolution",
+        "resolution (px)",
+        "ms per cell",
+        &[t_series],
+        Scale::Log,
+        Scale::Log,
+    )?;
+    line_chart(
+        &out.join("fig12-hidden.png"),
+        "ext-proj: % hidden vs depth-map resolution",
+        "resolution (px)",
+        "% of objects hidden",
+        &[h_series],
+        Scale::Log,
+        Scale::Linear,
+    )?;
+    rep.image("fig12-time.png", "time vs resolution");
+    rep.image("fig12-hidden.png", "hidden vs resolution");
+
+    let trees = b.suite.forest_trees;
+    b.log(&format!("forest sweep on {trees} trees"));
+    let forest = NamedScene {
+        name: format!("forest-{trees}"),
+        scene: Arc::new(sightline_scene::generate::forest(b.suite.seed, trees)),
+    };
+    let tris: usize = forest
+        .scene
+        .objects
+        .iter()
+        .map(|o| o.triangle_count())
+        .sum();
+    let cells = pick_cells(&forest.scene, 20.0, b.suite.cells_per_setting);
+    let truths = b.truths(&forest, &cells);
+    let mut table = Table::new(&[
+        "variant",
+        "ms/cell (median)",
+        "% objects culled",
+        "over (median)",
+        "missed",
+    ]);
+    let mut variants: Vec<(String, MethodOptions)> =
+        vec![("ext-proj (no sweep)".into(), MethodOptions::default())];
+    for &p in &b.suite.sweep_planes {
+        variants.push((
+            format!("sweep, {p} planes"),
+            MethodOptions {
+                sweep: true,
+                planes: Some(p),
+                ..Default::default()
+            },
+        ));
+    }
+    for (label, opts) in variants {
+        let Some(m) = b.method(&forest, "ext-proj", &opts) else {
+            continue;
+        };
+        let recs = b.measure(
+            "sweep",
+            &forest,
+            m.as_ref(),
+            &label,
+            20.0,
+            &cells,
+            Some(&truths),
+        );
+        let (om, _, tm, _, missed, hidden) = summarize(&recs);
+        table.row(vec![
+            label,
+            f(tm, 1),
+            f(100.0 * hidden, 1),
+            f(om, 2),
+            missed.to_string(),
+        ]);
+    }
+    rep.para(&format!(
+        "Generated forest: {trees} trees, {} objects, {tris} triangles, 20 m cells:",
+        forest.scene.objects.len()
+    ));
+    rep.table(&table);
+    Ok(())
+}
+
+/// All conservative methods on the same cells.
+fn side_by_side(
+    b: &mut Bench,
+    scenes: &[NamedScene],
+    names: &[String],
+    rep: &mut Report,
+) -> anyhow::Result<()> {
+    rep.section("All methods on the same cells");
+    rep.para("Per method: ms per cell (median, p90), `over` = |PVS|/|VS| (median, p90), total `missed` (must be 0 for every conservative method), mean hidden fraction.");
+    for s in scenes {
+        let size = 25.0;
+        let cells = pick_cells(&s.scene, size, b.suite.cells_per_setting * 2);
+        let truths = b.truths(s, &cells);
+        let mut table = Table::new(&[
+            "method",
+            "cells",
+            "ms median",
+            "ms p90",
+            "over median",
+            "over p90",
+            "missed",
+            "hidden %",
+        ]);
+        for name in names {
+            let Some(m) = b.method(s, name, &MethodOptions::default()) else {
+                continue;
+            };
+            let recs = b.measure(
+                "side-by-side",
+                s,
+                m.as_ref(),
+                "",
+                size,
+                &cells,
+                Some(&truths),
+            );
+            let (om, op, tm, tp, missed, hidden) = summarize(&recs);
+            table.row(vec![
+                name.clone(),
+                recs.len().to_string(),
+                f(tm, 2),
+                f(tp, 2),
+                f(om, 2),
+                f(op, 2),
+                missed.to_string(),
+                f(100.0 * hidden, 1),
+            ]);
+        }
+        rep.para(&format!(
+            "**{}** ({} objects), {size:.0} m street cells:",
+            s.name,
+            s.scene.objects.len()
+        ));
+        rep.table(&table);
+    }
+    Ok(())
+}
+
+/// ms/cell vs number of buildings, log-log with the fitted exponent.
+fn scaling(b: &mut Bench, names: &[String], rep: &mut Report, out: &Path) -> anyhow::Result<()> {
+    rep.section("Scaling with scene size");
+    let mut per_method: HashMap<String, Vec<(f64, f64)>> = HashMap::new();
+    for &n in &b.suite.scaling_buildings.clone() {
+        b.log(&format!("scaling on {n} buildings"));
+        let s = NamedScene {
+            name: format!("metropolis-{n}"),
+            scene: Arc::new(sightline_scene::generate::metropolis(b.suite.seed, n)),
+        };
+        let cells = pick_cells(&s.scene, 100.0, b.suite.cells_per_setting.min(4));
+        for name in names {
+            let Some(m) = b.method(&s, name, &MethodOptions::default()) else {
+                continue;
+            };
+            let recs = b.measure("scaling", &s, m.as_ref(), "", 100.0, &cells, None);
+            let t = median(&recs.iter().map(|r| r.ms).collect::<Vec<_>>());
+            per_method
+                .entry(name.clone())
+                .or_default()
+                .push((s.scene.objects.len() as f64, t));
+        }
+    }
+    let mut table = Table::new(&["method", "ms/cell at each size", "fitted exponent"]);
+    let mut series = Vec::new();
+    let mut keys: Vec<&String> = per_method.keys().collect();
+    keys.sort();
+    for k in keys {
+        let pts = &per_method[k];
+        let desc = pts
+            .iter()
+            .map(|(n, t)| format!("{n:.0}: {t:.2}"))
+            .collect::<Vec<_>>()
+            .join(", ");
+        table.row(vec![k.clone(), desc, f(loglog_slope(pts), 2)]);
+        series.push(Series {
+            name: k.clone(),
+            points: pts.clone(),
+        });
+    }
+    rep.para("Median ms per 100 m cell on generated metropolises of growing size (the extended projections paper reports growth close to √n):");
+    rep.table(&table);
+    if !series.is_empty() {
+        line_chart(
+            &out.join("scaling.png"),
+            "time per cell vs scene size",
+            "buildings",
+            "ms per cell (median)",
+            &series,
+            Scale::Log,
+            Scale::Log,
+        )?;
+        rep.image("scaling.png", "scaling");
+    }
+    Ok(())
+}
+
+/// Run a suite and write `out/README.md`, `out/raw.json` and the plots.
+pub fn run(
+    suite: Suite,
+    extra: &[PathBuf],
+    methods: Option<Vec<String>>,
+    out: &Path,
+    quiet: bool,
+) -> anyhow::Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    let started = Instant::now();
+    let names: Vec<String> =
+        methods.unwrap_or_else(|| CONSERVATIVE.iter().map(|s| s.to_string()).collect());
+    for n in &names {
+        if !sightline_methods::METHOD_NAMES.contains(&n.as_str()) {
+            anyhow::bail!("unknown method '{n}'");
+        }
+    }
+    let mut b = Bench::new(suite.clone(), quiet);
+    let mut scenes = vec![NamedScene {
+        name: format!("city-{}", suite.city_buildings),
+        scene: Arc::new(sightline_scene::generate::city(
+            suite.seed,
+            suite.city_buildings,
+        )),
+    }];
+    for p in extra {
+        let scene = sightline_scene::import::load(p, &Default::default())
+            .with_context(|| format!("cannot load {}", p.display()))?;
+        let name = p
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("scene")
+            .to_string();
+        scenes.push(NamedScene {
+            name,
+            scene: Arc::new(scene),
+        });
+    }
+    let machine = Machine::detect();
+    let mut rep = Report::new(&suite, &machine);
+    fig9(&mut b, &scenes, &mut rep, out)?;
+    side_by_side(&mut b, &scenes, &names, &mut rep)?;
+    table1(&mut b, &mut rep, out)?;
+    ext_proj(&mut b, &scenes[0], &mut rep, out)?;
+    scaling(&mut b, &names, &mut rep, out)?;
+    rep.notes(&b.notes);
+    rep.footer(started.elapsed().as_secs_f64());
+    crate::common::write_atomic(&out.join("README.md"), rep.markdown().as_bytes())?;
+    #[derive(Serialize)]
+    struct Raw<'a> {
+        suite: &'a Suite,
+        machine: &'a Machine,
+        records: &'a [Record],
+        notes: &'a [String],
+    }
+    let raw = serde_json::to_vec_pretty(&Raw {
+        suite: &suite,
+        machine: &machine,
+        records: &b.records,
+        notes: &b.notes,
+    })?;
+    crate::common::write_atomic(&out.join("raw.json"), &raw)?;
+    Ok(())
+}

@@ -1,0 +1,15 @@
+//! `sightline bench`: the papers' experiments on our scenes, with a Markdown report,
+//! PNG plots and a JSON of every raw figure (SPEC §7).
+//!
+//! Every method is driven through the one `VisibilityMethod` trait, so the suite grows
+//! as methods land; a method that is not available is listed as such, never replaced.
+//! `missed` and `over` are measured against the sampled ground truth, computed once per
+//! cell and shared by all methods.
+
+mod experiments;
+mod machine;
+mod plots;
+mod report;
+pub mod stats;
+
+pub use experiments::{run, Suite};

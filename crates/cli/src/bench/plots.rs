@@ -1,0 +1,115 @@
+//! PNG line charts for the report (plotters, bitmap backend).
+
+use plotters::prelude::*;
+use std::path::Path;
+
+/// One named curve.
+pub struct Series {
+    pub name: String,
+    pub points: Vec<(f64, f64)>,
+}
+
+/// Axis scaling of a chart.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub enum Scale {
+    Linear,
+    Log,
+}
+
+/// Draw `series` as lines with markers into a 900×560 PNG.
+pub fn line_chart(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+    x_scale: Scale,
+    y_scale: Scale,
+) -> anyhow::Result<()> {
+    let pts = series.iter().flat_map(|s| s.points.iter()).filter(|p| {
+        p.0.is_finite()
+            && p.1.is_finite()
+            && (x_scale == Scale::Linear || p.0 > 0.0)
+            && (y_scale == Scale::Linear || p.1 > 0.0)
+    });
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for p in pts {
+        x0 = x0.min(p.0);
+        x1 = x1.max(p.0);
+        y0 = y0.min(p.1);
+        y1 = y1.max(p.1);
+    }
+    if x0 > x1 {
+        anyhow::bail!("chart '{title}' has no finite points");
+    }
+    let pad = |a: f64, b: f64, s: Scale| -> (f64, f64) {
+        match s {
+            Scale::Log => (a / 1.3, b * 1.3),
+            Scale::Linear => {
+                let d = if b > a {
+                    (b - a) * 0.08
+                } else {
+                    a.abs().max(1.0) * 0.1
+                };
+                (a - d, b + d)
+            }
+        }
+    };
+    let (x0, x1) = pad(x0, x1, x_scale);
+    let (y0, y1) = pad(y0, y1, y_scale);
+    let y0 = if y_scale == Scale::Linear && y0 < 0.0 && y1 > 0.0 && y0 > -0.05 * y1 {
+        0.0
+    } else {
+        y0
+    };
+
+    let root = BitMapBackend::new(path, (900, 560)).into_drawing_area();
+    root.fill(&WHITE)?;
+    macro_rules! draw {
+        ($xr:expr, $yr:expr) => {{
+            let mut chart = ChartBuilder::on(&root)
+                .caption(title, ("sans-serif", 22))
+                .margin(14)
+                .x_label_area_size(44)
+                .y_label_area_size(64)
+                .build_cartesian_2d($xr, $yr)?;
+            chart
+                .configure_mesh()
+                .x_desc(x_label)
+                .y_desc(y_label)
+                .label_style(("sans-serif", 14))
+                .draw()?;
+            for (i, s) in series.iter().enumerate() {
+                let color = Palette99::pick(i).to_rgba();
+                let pts: Vec<(f64, f64)> = s
+                    .points
+                    .iter()
+                    .copied()
+                    .filter(|p| p.0.is_finite() && p.1.is_finite())
+                    .collect();
+                chart
+                    .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))?
+                    .label(s.name.clone())
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+                    });
+                chart.draw_series(pts.iter().map(|p| Circle::new(*p, 4, color.filled())))?;
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 14))
+                .position(SeriesLabelPosition::UpperLeft)
+                .draw()?;
+        }};
+    }
+    match (x_scale, y_scale) {
+        (Scale::Linear, Scale::Linear) => draw!(x0..x1, y0..y1),
+        (Scale::Log, Scale::Linear) => draw!((x0..x1).log_scale(), y0..y1),
+        (Scale::Linear, Scale::Log) => draw!(x0..x1, (y0..y1).log_scale()),
+        (Scale::Log, Scale::Log) => draw!((x0..x1).log_scale(), (y0..y1).log_scale()),
+    }
+    root.present()?;
+    Ok(())
+}
