@@ -217,7 +217,7 @@ pub enum Command {
         addr: String,
         #[arg(long, default_value_t = 100.0)]
         cell_size: f64,
-        #[arg(long, default_value = "erosion")]
+        #[arg(long, default_value = "dual-ray")]
         method: String,
         /// Require this token (`?token=` or `Authorization: Bearer`).
         #[arg(long)]

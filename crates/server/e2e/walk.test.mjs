@@ -7,7 +7,7 @@
 // Environment:
 //   SIGHTLINE_BIN   the binary (default: <repo>/target/debug/sightline)
 //   E2E_SCENE       scene file (default: <repo>/data/lyon1_bdtopo.geojson)
-//   E2E_METHOD      on-line method (default: erosion)
+//   E2E_METHOD      on-line method (default: dual-ray, the fastest conservative one)
 //   E2E_CELL_SIZE   viewcell size in metres (default: 100)
 //   CHROMIUM        browser executable (default: /usr/bin/chromium)
 import { spawn } from 'node:child_process';
@@ -21,7 +21,7 @@ const here = dirname(fileURLToPath(import.meta.url));
 const repo = resolve(here, '../../..');
 const bin = process.env.SIGHTLINE_BIN || join(repo, 'target/debug/sightline');
 const sceneFile = process.env.E2E_SCENE || join(repo, 'data/lyon1_bdtopo.geojson');
-const method = process.env.E2E_METHOD || 'erosion';
+const method = process.env.E2E_METHOD || 'dual-ray';
 const cellSize = Number(process.env.E2E_CELL_SIZE || 100);
 const outDir = join(here, 'out');
 mkdirSync(outDir, { recursive: true });
