@@ -105,17 +105,7 @@ pub struct LocalBox {
 impl LocalBox {
     /// The 8 corners (duplicates for flat boxes are harmless).
     pub fn corners(&self) -> [DVec3; 8] {
-        let (a, b) = (self.min, self.max);
-        [
-            DVec3::new(a.x, a.y, a.z),
-            DVec3::new(b.x, a.y, a.z),
-            DVec3::new(a.x, b.y, a.z),
-            DVec3::new(b.x, b.y, a.z),
-            DVec3::new(a.x, a.y, b.z),
-            DVec3::new(b.x, a.y, b.z),
-            DVec3::new(a.x, b.y, b.z),
-            DVec3::new(b.x, b.y, b.z),
-        ]
+        sightline_geom::Aabb3::new(self.min, self.max).corners()
     }
 }
 
