@@ -1,20 +1,26 @@
-//! Exact 2D erosion of footprints by convex structuring elements (Décoret et al. 2003,
-//! §4.3, equation (1)) and the elements themselves (§3.3, §5.1).
+//! Erosion of the occluder height field by convex structuring elements (Décoret et
+//! al. 2003, §3.1 Theorem 1, §4.3) and the elements themselves (§3.3, §5.1).
 //!
-//! `P ⊖ X = P \ (∂P ⊕ −X)` for a convex `X` containing the origin: every edge of `P`
-//! is swept by `−X` (the convex hull of its two end points translated by `−X`), the
-//! swept hulls are unioned and subtracted from `P`. An element that does not contain
-//! the origin (a side of the cell seen from its centre, Fig. 5) is first translated by
-//! one of its points `x₀`: `P ⊖ X = (P ⊖ (X − x₀)) − x₀`.
+//! Horizontal erosion of a height field is a min-filter: `(H ⊖ X)(v) = min_{x∈X} H(v + x)`
+//! (the level-set erosion of §4.3, all levels at once). On the inner raster `G` of
+//! [`super::field`] it is computed *conservatively*: the eroded pixel `p` gets the least
+//! `G` over every pixel meeting `p ⊕ X`, so for every point `v` of `p` and `x` of `X`,
+//! `H(v + x) ≥ G(q) ≥ E(p)` — the raster `E` is an inner bound of the exact erosion, at
+//! any pixel size. This replaces the paper's polygon booleans (equation (1)): same
+//! result up to one pixel, a hundred times faster, and touching buildings are fused by
+//! construction (NOTES §1).
 //!
-//! Rounding: the booleans snap to the 1 mm grid of [`sightline_geom::boolean`]; every
-//! swept hull is grown by [`GRID_MARGIN_M`] so the result stays inside the exact
-//! erosion (NOTES §3: occluders are rounded *inward*).
+//! * An axis-parallel element (a side of the cell, the cell itself) is a rectangle of
+//!   pixel offsets: two separable running minima.
+//! * A diagonal is sampled every pixel at most; each sample covers the segment points
+//!   within half a pixel of it, so a 3 × 3 minimum around each rounded sample offset
+//!   covers `p ⊕ X`.
+//! * The octagon of `shrink-sphere` is a zonotope — the Minkowski sum of four segments at
+//!   0°, 45°, 90°, 135° — eroded by each in turn (Appendix B: `O ⊖ (X ⊕ Y) =
+//!   (O ⊖ X) ⊖ Y`; each discrete step only shrinks more, so the chain stays inner).
 
-use sightline_geom::{boolean, DVec2, Polygon};
-
-/// Extra inward rounding of eroded occluders: two grid steps of the boolean engine.
-pub const GRID_MARGIN_M: f64 = 2.0 * boolean::GRID_M;
+use super::field::Grid;
+use sightline_geom::DVec2;
 
 /// The horizontal structuring elements used for a box viewcell of half sizes `(a, b)`,
 /// all expressed relative to the cell centre `S` (everything is rendered from `S`).
@@ -84,78 +90,179 @@ impl Element {
     }
 }
 
-/// Convex hull (Andrew's monotone chain), counter-clockwise, without collinear points.
-pub fn convex_hull(mut pts: Vec<DVec2>) -> Vec<DVec2> {
-    pts.sort_by(|p, q| p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y)));
-    pts.dedup();
-    if pts.len() < 3 {
-        return pts;
-    }
-    let cross = |o: DVec2, a: DVec2, b: DVec2| (a - o).perp_dot(b - o);
-    let mut lower: Vec<DVec2> = Vec::with_capacity(pts.len());
-    for &p in &pts {
-        while lower.len() >= 2 && cross(lower[lower.len() - 2], lower[lower.len() - 1], p) <= 0.0 {
-            lower.pop();
-        }
-        lower.push(p);
-    }
-    let mut upper: Vec<DVec2> = Vec::with_capacity(pts.len());
-    for &p in pts.iter().rev() {
-        while upper.len() >= 2 && cross(upper[upper.len() - 2], upper[upper.len() - 1], p) <= 0.0 {
-            upper.pop();
-        }
-        upper.push(p);
-    }
-    lower.pop();
-    upper.pop();
-    lower.extend(upper);
-    lower
+/// Pixel offsets `k` such that the pixels `i + k` cover pixel `i` displaced by any
+/// amount in `[lo, hi]` (metres) along one axis. Pixels are closed, so a displaced
+/// pixel that lands exactly on the grid needs one pixel, not three; ratios within
+/// 1e-9 pixel of an integer are taken as that integer (below the precision of any
+/// input coordinate).
+fn offsets(lo: f64, hi: f64, pixel_m: f64) -> (i64, i64) {
+    (
+        snap(lo / pixel_m).floor() as i64,
+        snap(hi / pixel_m).ceil() as i64,
+    )
 }
 
-/// `polys ⊖ X` for a convex element given by its vertices (equation (1)), rounded inward
-/// by `margin` metres (the result lies inside the exact erosion by `X ⊕ B(margin)`
-/// for the square `B`, hence inside `polys ⊖ X` after snapping).
-///
-/// `polys` must be interior-disjoint (e.g. the output of a union): the erosion of
-/// their union is what is computed.
-pub fn erode(polys: &[Polygon], element: &[DVec2], margin: f64) -> Vec<Polygon> {
-    if polys.is_empty() || element.is_empty() {
-        return polys.to_vec();
-    }
-    // Make the element contain the origin: X' = X − x₀.
-    let x0 = element[0];
-    let mut xs: Vec<DVec2> = Vec::with_capacity(element.len() * 4);
-    for &x in element {
-        let x = x - x0;
-        for d in [
-            DVec2::new(-margin, -margin),
-            DVec2::new(margin, -margin),
-            DVec2::new(margin, margin),
-            DVec2::new(-margin, margin),
-        ] {
-            xs.push(x + d);
-        }
-    }
-    let mut band: Vec<Polygon> = Vec::new();
-    for p in polys {
-        for (a, b) in p.edges() {
-            let mut pts = Vec::with_capacity(xs.len() * 2);
-            for &x in &xs {
-                pts.push(a - x);
-                pts.push(b - x);
-            }
-            let hull = convex_hull(pts);
-            if hull.len() >= 3 {
-                band.push(Polygon::new(hull, vec![]));
-            }
-        }
-    }
-    let eroded = boolean::difference(polys, &band);
-    // Undo the translation: P ⊖ X = (P ⊖ X') − x₀.
-    if x0 == DVec2::ZERO {
-        eroded
+/// `x`, or the nearest integer if it is within 1e-9 of it.
+pub(crate) fn snap(x: f64) -> f64 {
+    let r = x.round();
+    if (x - r).abs() < 1e-9 {
+        r
     } else {
-        eroded.iter().map(|p| p.translated(-x0)).collect()
+        x
+    }
+}
+
+/// `G ⊖ X` as an inner raster (module doc), on a raster grown by the element's reach.
+pub fn erode(g: &Grid, element: Element, half: DVec2) -> Grid {
+    let d = g.pixel_m;
+    let reach = element
+        .vertices(half)
+        .iter()
+        .map(|v| v.abs().max_element())
+        .fold(0.0, f64::max);
+    let pad = (reach / d).ceil() as i64 + 3;
+    let mut p = Grid::zeros(
+        g.origin - DVec2::splat(pad as f64 * d),
+        d,
+        g.nx + 2 * pad,
+        g.ny + 2 * pad,
+    );
+    for j in 0..g.ny {
+        let src = &g.data[(j * g.nx) as usize..((j + 1) * g.nx) as usize];
+        let at = ((j + pad) * p.nx + pad) as usize;
+        p.data[at..at + g.nx as usize].copy_from_slice(src);
+    }
+    let (a, b) = (half.x, half.y);
+    let v = DVec2::new;
+    match element {
+        Element::Right => window(&p, offsets(a, a, d), offsets(-b, b, d)),
+        Element::Left => window(&p, offsets(-a, -a, d), offsets(-b, b, d)),
+        Element::Top => window(&p, offsets(-a, a, d), offsets(b, b, d)),
+        Element::Bottom => window(&p, offsets(-a, a, d), offsets(-b, -b, d)),
+        Element::Cell => window(&p, offsets(-a, a, d), offsets(-b, b, d)),
+        Element::Diagonal => segment(&p, v(-a, -b), v(a, b)),
+        Element::AntiDiagonal => segment(&p, v(-a, b), v(a, -b)),
+        Element::Octagon => {
+            let rv = half.length() / (std::f64::consts::PI / 8.0).cos();
+            let l = 2.0 * rv * (std::f64::consts::PI / 8.0).sin();
+            let h = l / 2.0;
+            let q = h * std::f64::consts::FRAC_1_SQRT_2;
+            let e = window(&p, offsets(-h, h, d), offsets(-h, h, d));
+            let e = segment(&e, v(-q, -q), v(q, q));
+            segment(&e, v(-q, q), v(q, -q))
+        }
+    }
+}
+
+/// `E(i, j) = min G(i + kx, j + ky)` over the offset rectangle.
+fn window(g: &Grid, (x0, x1): (i64, i64), (y0, y1): (i64, i64)) -> Grid {
+    let mut out = g.clone();
+    let mut scratch = Vec::new();
+    for row in out.data.chunks_exact_mut(g.nx as usize) {
+        window_min(row, x0, x1, &mut scratch, 1);
+    }
+    // Columns: the same running minimum with whole rows as elements.
+    window_min(&mut out.data, y0, y1, &mut scratch, g.nx as usize);
+    out
+}
+
+/// In place: `v[i] = min v[i + k·unit]` for `k` in `[k0, k1]` (0 outside), where `v`
+/// is a sequence of elements of `unit` values (1: a row; a row length: a grid).
+fn window_min(v: &mut [u16], k0: i64, k1: i64, m: &mut Vec<u16>, unit: usize) {
+    let n = (v.len() / unit) as i64;
+    let w = k1 - k0 + 1;
+    // m[i] = min v[i .. i + p) by doubling.
+    m.clear();
+    m.extend_from_slice(v);
+    let mut p = 1;
+    let mut ahead: Vec<u16> = Vec::new();
+    while 2 * p <= w {
+        let shift = (p as usize) * unit;
+        let len = m.len();
+        let keep = len.saturating_sub(shift);
+        // A copy of the values ahead lets the minimum run over disjoint slices (SIMD).
+        ahead.clear();
+        ahead.extend_from_slice(&m[len - keep..]);
+        for (x, &o) in m[..keep].iter_mut().zip(&ahead) {
+            *x = (*x).min(o);
+        }
+        m[keep..].fill(0);
+        p *= 2;
+    }
+    let get = |i: i64| -> &[u16] {
+        if i < 0 || i >= n {
+            &[]
+        } else {
+            &m[i as usize * unit..(i as usize + 1) * unit]
+        }
+    };
+    for i in 0..n {
+        let (a, b) = (get(i + k0), get(i + k0 + w - p));
+        let dst = &mut v[i as usize * unit..(i as usize + 1) * unit];
+        if a.is_empty() || b.is_empty() {
+            dst.fill(0);
+        } else {
+            for ((d, &x), &y) in dst.iter_mut().zip(a).zip(b) {
+                *d = x.min(y);
+            }
+        }
+    }
+}
+
+/// Erosion by the segment `u → v` (module doc: samples with 3 × 3 minima).
+fn segment(g: &Grid, u: DVec2, v: DVec2) -> Grid {
+    let d = g.pixel_m;
+    let g3 = window(g, (-1, 1), (-1, 1));
+    let span = (v - u).abs().max_element();
+    let steps = (span / d).ceil().max(1.0) as i64;
+    let mut centres: Vec<(i64, i64)> = Vec::new();
+    for s in 0..=steps {
+        let c = u + (v - u) * (s as f64 / steps as f64);
+        let (x0, x1) = offsets(c.x - d / 2.0, c.x + d / 2.0, d);
+        let (y0, y1) = offsets(c.y - d / 2.0, c.y + d / 2.0, d);
+        // Width ≤ 3: 3 × 3 blocks at both ends' inner neighbours cover the range.
+        for cx in [x0 + 1, x1 - 1] {
+            for cy in [y0 + 1, y1 - 1] {
+                centres.push((cx, cy));
+            }
+        }
+    }
+    centres.sort_unstable();
+    centres.dedup();
+    let mut out = Grid {
+        data: vec![u16::MAX; g.data.len()],
+        ..g.clone()
+    };
+    for (cx, cy) in centres {
+        shift_min(&mut out, &g3, cx, cy);
+    }
+    out
+}
+
+/// `dst(i, j) = min(dst(i, j), src(i + dx, j + dy))` (0 outside `src`).
+fn shift_min(dst: &mut Grid, src: &Grid, dx: i64, dy: i64) {
+    let (nx, ny) = (src.nx, src.ny);
+    for j in 0..ny {
+        let row = &mut dst.data[(j * nx) as usize..((j + 1) * nx) as usize];
+        let sj = j + dy;
+        if sj < 0 || sj >= ny {
+            row.fill(0);
+            continue;
+        }
+        let srow = &src.data[(sj * nx) as usize..((sj + 1) * nx) as usize];
+        // Valid i: 0 ≤ i + dx < nx.
+        let i0 = (-dx).clamp(0, nx) as usize;
+        let i1 = (nx - dx).clamp(0, nx) as usize;
+        row[..i0].fill(0);
+        row[i1..].fill(0);
+        if i0 < i1 {
+            let s0 = (i0 as i64 + dx) as usize;
+            for (d, &s) in row[i0..i1].iter_mut().zip(&srow[s0..s0 + (i1 - i0)]) {
+                if s < *d {
+                    *d = s;
+                }
+            }
+        }
     }
 }
 
@@ -163,69 +270,95 @@ pub fn erode(polys: &[Polygon], element: &[DVec2], margin: f64) -> Vec<Polygon> 
 mod tests {
     use super::*;
 
-    fn l_shape() -> Polygon {
-        Polygon::new(
-            vec![
-                DVec2::new(0.0, 0.0),
-                DVec2::new(8.0, 0.0),
-                DVec2::new(8.0, 4.0),
-                DVec2::new(4.0, 4.0),
-                DVec2::new(4.0, 8.0),
-                DVec2::new(0.0, 8.0),
-            ],
-            vec![],
-        )
-    }
-
-    fn area(ps: &[Polygon]) -> f64 {
-        ps.iter().map(Polygon::area).sum()
-    }
-
-    #[test]
-    fn erosion_of_l_by_square_and_segment() {
-        // DEPS.md reference values: L of area 64 (here 48: 8x8 minus 4x4) — compute by hand:
-        // eroding by [-1,1]^2 keeps [1,7]x[1,3] ∪ [1,3]x[1,7] = 12 + 12 - 4 = 20.
-        let sq = Element::Cell.vertices(DVec2::new(1.0, 1.0));
-        let e = erode(&[l_shape()], &sq, 0.0);
-        assert!((area(&e) - 20.0).abs() < 1e-3, "{}", area(&e));
-        // Segment (−1,0)–(1,0): [1,7]x[0,4] ∪ [1,3]x[0,8] = 24 + 16 - 8 = 32.
-        let seg = vec![DVec2::new(-1.0, 0.0), DVec2::new(1.0, 0.0)];
-        let e = erode(&[l_shape()], &seg, 0.0);
-        assert!((area(&e) - 32.0).abs() < 1e-3, "{}", area(&e));
-    }
-
-    #[test]
-    fn erosion_by_an_element_off_the_origin_translates() {
-        // Right side of a 2x2 cell: X = {(1, t) : t ∈ [-1, 1]}. A 10x10 square eroded:
-        // V + X ⊂ P ⇔ V.x + 1 ∈ [0,10], V.y ± 1 ∈ [0,10] → [-1, 9] x [1, 9].
-        let p = Polygon::rect(DVec2::ZERO, DVec2::splat(10.0));
-        let e = erode(&[p], &Element::Right.vertices(DVec2::ONE), 0.0);
-        assert_eq!(e.len(), 1);
-        let bb = e[0].bbox();
-        assert!((bb.min - DVec2::new(-1.0, 1.0)).length() < 1e-3, "{bb:?}");
-        assert!((bb.max - DVec2::new(9.0, 9.0)).length() < 1e-3, "{bb:?}");
-    }
-
-    #[test]
-    fn union_erodes_more_than_pieces() {
-        // Two touching 4x4 squares eroded by a 2x2 cell: the union keeps a 6x2 strip,
-        // the pieces only two 2x2 squares.
-        let a = Polygon::rect(DVec2::ZERO, DVec2::new(4.0, 4.0));
-        let b = Polygon::rect(DVec2::new(4.0, 0.0), DVec2::new(8.0, 4.0));
-        let x = Element::Cell.vertices(DVec2::ONE);
-        let fused = erode(&boolean::union(&[a.clone(), b.clone()]), &x, 0.0);
-        let pieces = [erode(&[a], &x, 0.0), erode(&[b], &x, 0.0)].concat();
-        assert!((area(&fused) - 12.0).abs() < 1e-3);
-        assert!((area(&pieces) - 8.0).abs() < 1e-3);
-    }
-
-    #[test]
-    fn octagon_contains_the_cell() {
-        let half = DVec2::new(3.0, 1.0);
-        let oct = Element::Octagon.vertices(half);
-        let poly = Polygon::new(oct, vec![]);
-        for c in Element::Cell.vertices(half) {
-            assert!(poly.contains(c * 0.999));
+    fn grid_with(rects: &[(i64, i64, i64, i64, u16)]) -> Grid {
+        let mut g = Grid::zeros(DVec2::ZERO, 1.0, 40, 40);
+        for &(x0, y0, x1, y1, h) in rects {
+            for j in y0..y1 {
+                for i in x0..x1 {
+                    g.data[(j * 40 + i) as usize] = h;
+                }
+            }
         }
+        g
+    }
+
+    /// Brute force: min of G over every pixel meeting p ⊕ X (X sampled densely).
+    fn brute(g: &Grid, el: Element, half: DVec2, x: f64, y: f64) -> u16 {
+        let vs = el.vertices(half);
+        let mut m = u16::MAX;
+        let n = vs.len();
+        for k in 0..n {
+            for s in 0..=40 {
+                let xv = vs[k] + (vs[(k + 1) % n] - vs[k]) * (s as f64 / 40.0);
+                for (u, w) in [
+                    (0.01, 0.01),
+                    (0.99, 0.01),
+                    (0.01, 0.99),
+                    (0.99, 0.99),
+                    (0.5, 0.5),
+                ] {
+                    let q = DVec2::new(x + u, y + w) + xv;
+                    let (i, j) = (q.x.floor() as i64, q.y.floor() as i64);
+                    m = m.min(g.get(i, j));
+                }
+            }
+        }
+        m
+    }
+
+    #[test]
+    fn eroded_raster_is_inside_the_exact_erosion() {
+        let g = grid_with(&[
+            (5, 5, 30, 12, 100),
+            (10, 12, 22, 35, 60),
+            (22, 20, 34, 30, 80),
+        ]);
+        for el in [
+            Element::Right,
+            Element::Left,
+            Element::Top,
+            Element::Bottom,
+            Element::Diagonal,
+            Element::AntiDiagonal,
+            Element::Cell,
+            Element::Octagon,
+        ] {
+            let half = DVec2::new(2.6, 1.7);
+            let e = erode(&g, el, half);
+            let mut kept = 0;
+            for j in 0..e.ny {
+                for i in 0..e.nx {
+                    let v = e.data[(j * e.nx + i) as usize];
+                    if v == 0 {
+                        continue;
+                    }
+                    kept += 1;
+                    let x = e.origin.x + i as f64;
+                    let y = e.origin.y + j as f64;
+                    assert!(v <= brute(&g, el, half, x, y), "{el:?} at ({x},{y}): {v}");
+                }
+            }
+            assert!(kept > 0, "{el:?} erased everything");
+        }
+    }
+
+    #[test]
+    fn a_side_translates_and_shortens() {
+        // A 20 × 20 block eroded by the right side (a = 3, b = 4) moves 3 left and
+        // shrinks by 4 at top and bottom (the element is on the grid: no extra pixel).
+        let g = grid_with(&[(10, 10, 30, 30, 50)]);
+        let e = erode(&g, Element::Right, DVec2::new(3.0, 4.0));
+        let at = |x: f64, y: f64| {
+            e.get(
+                (x - e.origin.x).floor() as i64,
+                (y - e.origin.y).floor() as i64,
+            )
+        };
+        assert_eq!(at(8.5, 20.5), 50);
+        assert_eq!(at(5.5, 20.5), 0);
+        assert_eq!(at(26.5, 20.5), 50);
+        assert_eq!(at(27.5, 20.5), 0);
+        assert_eq!(at(20.5, 14.5), 50);
+        assert_eq!(at(20.5, 13.5), 0);
     }
 }

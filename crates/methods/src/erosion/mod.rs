@@ -9,15 +9,17 @@
 //! at any resolution (the parameter only trades tightness for time).
 //!
 //! Pipeline (one module per concern):
-//! * [`levels`]: the inner bounds of all objects fused into one height field, as level
-//!   sets (NOTES §1) per square tile; eroded per structuring element and cell *shape*,
-//!   lazily per tile, cached for every cell of that shape (§5.1).
-//! * [`erode`]: exact polygon erosion by equation (1) (§4.3), rounded inward.
+//! * [`field`]: the inner bounds of all objects fused into one height field (NOTES §1),
+//!   rasterized conservatively (inner rule on the union), with closed courtyards filled
+//!   where that provably hides nothing visible.
+//! * [`erode`]: erosion of that raster by the structuring elements (§3.1, §4.3) — a
+//!   conservative min-filter — cached for every cell of the same *shape* (§5.1).
 //! * [`shrink`]: occludee pieces, the supporting segment of each (§3.3, §5.1), the
 //!   shrunk occludee (§4.4) and the eye raise that makes §3.3 hold in 3D.
-//! * [`occlusion`]: the from-centre test (§5) on a polar occlusion map: inner coverage
-//!   of eroded occluders with farthest depth, occludees with outer coverage and nearest
-//!   depth, front-to-back tile culling against the map.
+//! * [`occlusion`]: the from-centre test (§5) on a polar occlusion map: eroded
+//!   occluders marched front to back along each needed direction with the inner rule
+//!   and farthest depth, stopping once the horizon is closed (§7 "Scaling"); occludees
+//!   with outer coverage and nearest depth.
 //!
 //! Vertical erosion (§3.4): the occluders united with the ground form a height field
 //! whose columns extend to −∞, so eroding by the cell's height segment only moves
@@ -26,22 +28,30 @@
 //! top faces of occludees as targets (the paper's "reduce the occludee by one half of
 //! the viewcell height" is the same argument, less tight).
 //!
-//! Parameter: `resolution_px` = number of azimuth bins (default 2048).
+//! Parameter: `resolution_px` = number of azimuth bins (default 2048); the occluder
+//! raster's pixel is [`field::PIXEL_M`] (larger for huge scenes).
 
 pub mod erode;
-pub mod levels;
+pub mod field;
 pub mod occlusion;
 pub mod shrink;
 
 use crate::{MethodError, MethodOptions, VisibilityMethod};
 use erode::Element;
-use levels::{ErodedField, HeightField};
+use field::{HeightField, MinPyramid};
 use occlusion::{Bins, PolarMap, Target};
 use shrink::Region;
 use sightline_geom::{Aabb2, DVec2, ViewCell};
 use sightline_scene::Scene;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
+
+/// Cells are refined into quarters at most this many times (see `refine`).
+pub const MAX_DEPTH: usize = 3;
+/// Sub-cells are not made smaller than this (m).
+pub const MIN_SUBCELL_M: f64 = 2.0;
+/// Memory bound of the cache of eroded occluder rasters (bytes).
+const CACHE_BYTES: usize = 1 << 30;
 
 /// Default number of azimuth bins of the occlusion map.
 pub const DEFAULT_BINS: u32 = 2048;
@@ -90,8 +100,14 @@ pub struct ErosionMethod {
     field: HeightField,
     tops: Vec<Vec<Top>>,
     bins: usize,
-    cache: Mutex<HashMap<(i64, i64, Element), Arc<ErodedField>>>,
+    /// Eroded occluders per (cell half size in µm, element, fill threshold in dm), with
+    /// the tick of their last use (least recently used evicted beyond `CACHE_BYTES`).
+    cache: Mutex<(u64, ErodedCache)>,
 }
+
+type CacheKey = (i64, i64, Element, u16);
+/// Eroded occluder pyramids with the tick of their last use.
+type ErodedCache = HashMap<CacheKey, (Arc<MinPyramid>, u64)>;
 
 /// One visibility test of an occludee piece.
 struct Test {
@@ -136,22 +152,49 @@ impl ErosionMethod {
             field,
             tops,
             bins: bins as usize,
-            cache: Mutex::new(HashMap::new()),
+            cache: Mutex::new((0, HashMap::new())),
         })
     }
 
-    /// The erosion of the scene's occluders by `element` for cells of half size `half`.
-    fn eroded(&self, element: Element, half: DVec2) -> Arc<ErodedField> {
+    /// The erosion of the scene's occluders (courtyards filled above `fill_dm`) by
+    /// `element` for cells of half size `half`, shared by every cell of that shape.
+    fn eroded(&self, element: Element, half: DVec2, fill_dm: u16) -> Arc<MinPyramid> {
         let key = (
             (half.x * 1e6).round() as i64,
             (half.y * 1e6).round() as i64,
             element,
+            fill_dm,
         );
-        let mut cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
-        cache
-            .entry(key)
-            .or_insert_with(|| Arc::new(ErodedField::new(&self.field, element, half)))
-            .clone()
+        {
+            let mut c = self.cache.lock().unwrap_or_else(|e| e.into_inner());
+            c.0 += 1;
+            let tick = c.0;
+            if let Some(e) = c.1.get_mut(&key) {
+                e.1 = tick;
+                return e.0.clone();
+            }
+        }
+        // Computed outside the lock: two threads may race to the same field, harmlessly.
+        let g = Arc::new(MinPyramid::new(erode::erode(
+            &self.field.filled(fill_dm),
+            element,
+            half,
+        )));
+        let mut c = self.cache.lock().unwrap_or_else(|e| e.into_inner());
+        let tick = c.0;
+        c.1.insert(key, (g.clone(), tick));
+        let bytes = |m: &ErodedCache| -> usize {
+            m.values()
+                .flat_map(|(g, _)| g.levels.iter().map(|l| l.data.len() * 2))
+                .sum()
+        };
+        while c.1.len() > 1 && bytes(&c.1) > CACHE_BYTES {
+            let oldest = c.1.iter().min_by_key(|(_, v)| v.1).map(|(k, _)| *k);
+            if let Some(k) = oldest {
+                c.1.remove(&k);
+            }
+        }
+        g
     }
 
     /// The tests of one object (None: visible without testing).
@@ -237,48 +280,119 @@ impl ErosionMethod {
         Some(tests)
     }
 
-    /// Build the occlusion map of `element`: eroded tiles front to back, skipping
-    /// those that cannot add a useful blocker to any needed bin (hierarchical culling
-    /// against the map, §5.1 / §7 "Scaling").
-    fn render(&self, map: &mut PolarMap, element: Element, ctx: &CellCtx) {
-        let eroded = self.eroded(element, ctx.half);
-        let mut order: Vec<(f64, usize)> = (0..eroded.tiles.len())
-            .map(|i| (rect_distance(eroded.piece_rect(i), ctx.s), i))
+    /// Mark in `found` the objects of `candidates` that `cell` may see.
+    ///
+    /// The PVS of a cell is the union of the PVS of its parts (each is a viewcell), and
+    /// an object hidden from a cell is hidden from every part of it. So the cell is
+    /// tested first as a whole — which culls most of a city cheaply — and then, for what
+    /// it may see, in quarters, recursively: deeper cells erode the occluders by a few
+    /// metres instead of the whole cell, which is Theorem 1's price (§7 "Bad
+    /// scenario"). Cells of one depth share one shape, hence one set of eroded
+    /// occluders (§5.1); an object found visible is not tested again; a part with no
+    /// free space sees nothing (SPEC §3).
+    fn refine(
+        &self,
+        cell: &ViewCell,
+        rect: Aabb2,
+        candidates: Vec<u32>,
+        depth: usize,
+        found: &mut [bool],
+    ) {
+        let mut undecided: Vec<u32> = candidates
+            .into_iter()
+            .filter(|&i| !found[i as usize])
             .collect();
-        order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        for (d, ti) in order {
-            let h_max = eroded.h_max(&self.field, ti);
-            if h_max <= ctx.z1 {
-                continue;
+        if undecided.is_empty() || !self.field.has_free_space(rect, cell.max.z) {
+            return;
+        }
+        let mut visible = Vec::new();
+        self.decide(cell, rect, &mut undecided, &mut visible);
+        let size = rect.size();
+        if depth >= MAX_DEPTH || size.max_element() < 2.0 * MIN_SUBCELL_M || visible.is_empty() {
+            for i in visible {
+                found[i as usize] = true;
             }
-            if d > 0.0 {
-                let bb = eroded.piece_rect(ti);
-                let corners = [
-                    bb.min - ctx.s,
-                    DVec2::new(bb.max.x, bb.min.y) - ctx.s,
-                    bb.max - ctx.s,
-                    DVec2::new(bb.min.x, bb.max.y) - ctx.s,
-                ];
-                if !map.could_improve(&corners, d, h_max) {
-                    continue;
+            return;
+        }
+        let c = rect.center();
+        for (lo, hi) in [
+            (rect.min, c),
+            (DVec2::new(c.x, rect.min.y), DVec2::new(rect.max.x, c.y)),
+            (DVec2::new(rect.min.x, c.y), DVec2::new(c.x, rect.max.y)),
+            (c, rect.max),
+        ] {
+            let Ok(sub) = ViewCell::from_array([lo.x, lo.y, cell.min.z, hi.x, hi.y, cell.max.z])
+            else {
+                // Cannot happen for a valid cell; keep the objects rather than lose them.
+                for &i in &visible {
+                    found[i as usize] = true;
                 }
-            }
-            for level in eroded.tile(&self.field, ti) {
-                if level.h <= ctx.z1 {
-                    break;
-                }
-                let polys: Vec<Vec<Vec<DVec2>>> = level
-                    .polys
-                    .iter()
-                    .map(|p| {
-                        p.rings()
-                            .map(|r| r.iter().map(|v| *v - ctx.s).collect())
-                            .collect()
-                    })
-                    .collect();
-                map.add_level(&polys, level.h);
+                return;
+            };
+            self.refine(&sub, Aabb2::new(lo, hi), visible.clone(), depth + 1, found);
+        }
+    }
+
+    /// Move the objects of `undecided` that `cell` (footprint `rect`) may see to
+    /// `visible`: the two-pass from-centre test of §5.
+    fn decide(
+        &self,
+        cell: &ViewCell,
+        rect: Aabb2,
+        undecided: &mut Vec<u32>,
+        visible: &mut Vec<u32>,
+    ) {
+        let ctx = CellCtx {
+            rect,
+            half: rect.size() * 0.5,
+            s: rect.center(),
+            z1: cell.max.z,
+            bins: Bins::new(self.bins),
+            cell_meets_occluders: matches!(self.variant, Variant::Full | Variant::Segment)
+                && self.field.meets_rect(rect),
+            fill_dm: self.field.fill_threshold(rect, cell.max.z),
+        };
+        let mut pending: Vec<(u32, Vec<Test>)> = Vec::new();
+        for &id in undecided.iter() {
+            match self.tests(id as usize, cell, &ctx) {
+                None => visible.push(id),
+                Some(t) => pending.push((id, t)),
             }
         }
+        // One map per element, rasterized only in the bins some test needs.
+        let mut maps: HashMap<Element, PolarMap> = HashMap::new();
+        for (_, tests) in &pending {
+            for t in tests {
+                maps.entry(t.element)
+                    .or_insert_with(|| PolarMap::new(ctx.bins.clone()))
+                    .need(&t.target, t.eye, t.t);
+            }
+        }
+        let mut elements: Vec<Element> = maps.keys().copied().collect();
+        elements.sort();
+        for el in elements {
+            if let Some(map) = maps.get_mut(&el) {
+                self.render(map, el, &ctx);
+            }
+        }
+        undecided.clear();
+        for (id, tests) in pending {
+            let hidden = tests.iter().all(|t| {
+                maps.get(&t.element)
+                    .is_some_and(|m| m.hidden(&t.target, t.eye, t.t))
+            });
+            if hidden {
+                undecided.push(id);
+            } else {
+                visible.push(id);
+            }
+        }
+    }
+
+    /// Build the occlusion map of `element` from the cell centre.
+    fn render(&self, map: &mut PolarMap, element: Element, ctx: &CellCtx) {
+        let eroded = self.eroded(element, ctx.half, ctx.fill_dm);
+        map.march(&eroded, ctx.s);
     }
 }
 
@@ -290,6 +404,8 @@ struct CellCtx {
     z1: f64,
     bins: Bins,
     cell_meets_occluders: bool,
+    /// Courtyards whose walls rise above this (dm) are filled (see `field`).
+    fill_dm: u16,
 }
 
 impl CellCtx {
@@ -300,13 +416,6 @@ impl CellCtx {
     }
 }
 
-/// Distance from `p` to the rectangle (0 inside).
-fn rect_distance(r: Aabb2, p: DVec2) -> f64 {
-    let dx = (r.min.x - p.x).max(p.x - r.max.x).max(0.0);
-    let dy = (r.min.y - p.y).max(p.y - r.max.y).max(0.0);
-    (dx * dx + dy * dy).sqrt()
-}
-
 impl VisibilityMethod for ErosionMethod {
     fn name(&self) -> &'static str {
         self.name
@@ -315,7 +424,7 @@ impl VisibilityMethod for ErosionMethod {
     fn params(&self) -> Vec<(String, String)> {
         vec![
             ("bins".into(), self.bins.to_string()),
-            ("height_step_m".into(), levels::HEIGHT_STEP_M.to_string()),
+            ("pixel_m".into(), self.field.g.pixel_m.to_string()),
         ]
     }
 
@@ -325,49 +434,12 @@ impl VisibilityMethod for ErosionMethod {
             return Err(MethodError::BadCell(cell.to_string()));
         }
         let rect = Aabb2::new(cell.min.truncate(), cell.max.truncate());
-        let ctx = CellCtx {
-            rect,
-            half: rect.size() * 0.5,
-            s: rect.center(),
-            z1: cell.max.z,
-            bins: Bins::new(self.bins),
-            cell_meets_occluders: matches!(self.variant, Variant::Full | Variant::Segment)
-                && self.field.meets_rect(rect),
-        };
-        let mut visible = Vec::new();
-        let mut pending: Vec<(u32, Vec<Test>)> = Vec::new();
-        for id in 0..self.scene.objects.len() {
-            match self.tests(id, cell, &ctx) {
-                None => visible.push(id as u32),
-                Some(t) => pending.push((id as u32, t)),
-            }
-        }
-        // One map per element, rasterized only in the bins some test needs.
-        let mut maps: HashMap<Element, PolarMap> = HashMap::new();
-        for (_, tests) in &pending {
-            for t in tests {
-                maps.entry(t.element)
-                    .or_insert_with(|| PolarMap::new(ctx.bins.clone()))
-                    .need(&t.target);
-            }
-        }
-        let mut elements: Vec<Element> = maps.keys().copied().collect();
-        elements.sort();
-        for el in elements {
-            if let Some(map) = maps.get_mut(&el) {
-                self.render(map, el, &ctx);
-            }
-        }
-        for (id, tests) in pending {
-            let hidden = tests.iter().all(|t| {
-                maps.get(&t.element)
-                    .is_some_and(|m| m.hidden(&t.target, t.eye, t.t))
-            });
-            if !hidden {
-                visible.push(id);
-            }
-        }
-        visible.sort_unstable();
+        let mut found = vec![false; self.scene.objects.len()];
+        let all: Vec<u32> = (0..self.scene.objects.len() as u32).collect();
+        self.refine(cell, rect, all, 0, &mut found);
+        let visible: Vec<u32> = (0..found.len() as u32)
+            .filter(|&i| found[i as usize])
+            .collect();
         Ok(visible)
     }
 }

@@ -1,19 +1,19 @@
 //! The from-centre occlusion test (§5), specialised to 2.5D: a *polar occlusion map*.
 //!
 //! Directions from the eye `S = (S_h, e)` are parametrised by azimuth (N bins over
-//! 360°) and, inside a bin, by elevation handled *analytically*. For a height-field
-//! occluder level `(P, h)` (footprint `P` extruded from the ground to `h`), a bin
-//! receives a *blocker* `(r_a, h)` when the whole annular sector
-//! `{θ ∈ bin, r ∈ [r_a, r_b]}` lies inside `P` — the *inner* coverage rule, at the
-//! *farthest* entry depth `r_a` over the bin. Any sight line in that bin whose height
-//! at horizontal distance `r_a` is below `h` is blocked there. Because level sets of
-//! the fused height field are unions, shared walls leave no crack (NOTES §2).
+//! 360°) and, inside a bin, by elevation handled *analytically*. The eroded occluders
+//! (an inner raster of the eroded height field, see `erode.rs`) are marched along each
+//! bin's wedge in annular sectors; a sector whose every pixel stands at least `h` high
+//! gives the bin a *blocker* `(r_a, h)` at its near radius — the *inner* coverage rule,
+//! at the *farthest* depth of the sector's entry. Any sight line in that bin whose
+//! height at horizontal distance `r_a` is below `h` is blocked there. Because the raster
+//! is of the fused height field, shared walls leave no crack (NOTES §2).
 //!
 //! An occludee is tested through its nearest distance `ρ_min` in each bin it touches
 //! (the *outer* rule: every touched bin counts, with the nearest depth): a target at
 //! height `t` is hidden in the bin iff a blocker with `r_a < ρ_min` and `h > e`
 //! satisfies `(t − e)·r_a < (h − e)·ρ_min` (a rising sight line passes below the
-//! blocker's top at `r_a`; a descending one always does). Nothing is sampled: the
+//! blocker's top at `r_a`; a descending one always does). Nothing is point-sampled: the
 //! answer is conservative at any number of bins, only its tightness depends on it.
 //!
 //! The eye height `e` is a *query* parameter. This is what makes the map fit the
@@ -24,22 +24,12 @@
 //! Blockers of a bin are kept as a Pareto staircase (`r_a` increasing, `h` increasing):
 //! a blocker both farther and lower than another never decides anything.
 
-use sightline_geom::DVec2;
+use super::field::{MinPyramid, DM};
+use sightline_geom::{Aabb2, DVec2};
 use std::f64::consts::TAU;
 
-/// Annular sectors thinner than this (m) are not used as blockers.
-const MIN_SECTOR_M: f64 = 1e-3;
 /// Slack in the conservative direction for distance and height comparisons (m).
 const EPS_M: f64 = 1e-6;
-
-/// One clipped piece of an edge inside a bin wedge.
-#[derive(Clone, Copy, Debug)]
-struct Hit {
-    bin: usize,
-    lo: f64,
-    hi: f64,
-    crosses_mid: bool,
-}
 
 /// Why an edge could not be rasterized: it passes through the eye.
 #[derive(Debug)]
@@ -213,11 +203,17 @@ impl Target {
 #[derive(Clone, Debug)]
 pub struct PolarMap {
     pub bins: Bins,
-    /// Bins some target will be tested in; occluders are only rasterized there.
-    pub needed: Vec<bool>,
+    /// Per bin: the farthest nearest-distance of a target tested there (−1: none);
+    /// occluders are only marched in those bins, and only that far.
+    reach: Vec<f64>,
+    /// Per bin: the highest target top, and the lowest and highest eye of the tests
+    /// there (a blocker no higher than every eye decides nothing; the early stop must
+    /// hold for the highest).
+    top: Vec<f64>,
+    eye_lo: Vec<f64>,
+    eye_hi: Vec<f64>,
     /// Per bin: blockers `(r_a, h)`, `r_a` increasing and `h` increasing.
     stairs: Vec<Vec<(f64, f64)>>,
-    scratch: Vec<Hit>,
 }
 
 impl PolarMap {
@@ -225,127 +221,67 @@ impl PolarMap {
         let n = bins.n;
         PolarMap {
             bins,
-            needed: vec![false; n],
+            reach: vec![-1.0; n],
+            top: vec![f64::NEG_INFINITY; n],
+            eye_lo: vec![f64::INFINITY; n],
+            eye_hi: vec![f64::NEG_INFINITY; n],
             stairs: vec![Vec::new(); n],
-            scratch: Vec::new(),
         }
     }
 
-    pub fn need(&mut self, t: &Target) {
-        for &(b, _) in &t.bins {
-            self.needed[b] = true;
+    /// Record that `t` will be tested with eye height `eye` and top height `top`.
+    pub fn need(&mut self, t: &Target, eye: f64, top: f64) {
+        for &(b, rho) in &t.bins {
+            self.reach[b] = self.reach[b].max(rho);
+            self.top[b] = self.top[b].max(top);
+            self.eye_lo[b] = self.eye_lo[b].min(eye);
+            self.eye_hi[b] = self.eye_hi[b].max(eye);
         }
     }
 
-    /// Whether some needed bin of the angular range of `corners` (relative to the eye,
-    /// of a convex set not containing the eye, at distance ≥ `d_min`, height ≤ `h`)
-    /// could still receive a useful blocker.
-    pub fn could_improve(&self, corners: &[DVec2], d_min: f64, h: f64) -> bool {
-        let mut any_needed = false;
-        let mut improve = false;
-        let n = corners.len();
-        let mut visit = |bin: usize| {
-            if self.needed[bin] {
-                any_needed = true;
-                if !self.stairs[bin]
-                    .iter()
-                    .any(|&(ra, hh)| ra <= d_min && hh >= h)
-                {
-                    improve = true;
-                }
-            }
-        };
-        // Bins of the convex hull = bins of its edges.
-        let mut seen = vec![];
-        for i in 0..n {
-            if self
-                .bins
-                .edge(corners[i], corners[(i + 1) % n], |b, _, _, _| seen.push(b))
-                .is_err()
-            {
-                return true;
-            }
-        }
-        seen.sort_unstable();
-        seen.dedup();
-        for b in seen {
-            visit(b);
-        }
-        any_needed && improve
-    }
-
-    /// Rasterize one occluder level: the interior-disjoint polygons `rings` (each a
-    /// list of rings: exterior and holes, relative to the eye) extruded from the ground
-    /// to `h`. A polygon with an edge through the eye is skipped (conservative).
-    pub fn add_level(&mut self, polys: &[Vec<Vec<DVec2>>], h: f64) {
-        for rings in polys {
-            self.scratch.clear();
-            let mut ok = true;
-            let needed = &self.needed;
-            let scratch = &mut self.scratch;
-            for ring in rings {
-                let n = ring.len();
-                for i in 0..n {
-                    let r = self
-                        .bins
-                        .edge(ring[i], ring[(i + 1) % n], |bin, lo, hi, c| {
-                            if needed[bin] {
-                                scratch.push(Hit {
-                                    bin,
-                                    lo,
-                                    hi,
-                                    crosses_mid: c,
-                                })
-                            }
-                        });
-                    if r.is_err() {
-                        ok = false;
-                    }
-                }
-            }
-            if !ok {
+    /// Fill the needed bins from an eroded occluder raster (decimetres) seen from
+    /// `eye` (horizontal position): each bin's wedge is cut radially into annular
+    /// sectors about a pixel long; a sector becomes a blocker at its near radius with
+    /// a lower bound of the height of every pixel it meets — the *inner* rule: the
+    /// whole sector stands at least that high, so any sight line of the bin that enters
+    /// it lower is blocked. A bin stops at its farthest target, or once a blocker hides
+    /// the highest target from the highest eye tested there at any distance beyond (an
+    /// early stop only costs tightness: fewer blockers never hide more).
+    pub fn march(&mut self, grid: &MinPyramid, eye: DVec2) {
+        let d = grid.levels[0].pixel_m;
+        let w = self.bins.width;
+        let bulge_k = 1.0 - w.cos();
+        for bin in 0..self.bins.n {
+            let reach = self.reach[bin];
+            if reach < 0.0 {
                 continue;
             }
-            let mut hits = std::mem::take(&mut self.scratch);
-            hits.sort_by(|a, b| a.bin.cmp(&b.bin).then(a.lo.total_cmp(&b.lo)));
-            let mut i = 0;
-            while i < hits.len() {
-                let bin = hits[i].bin;
-                let mut j = i;
-                while j < hits.len() && hits[j].bin == bin {
-                    j += 1;
+            let (top, e_lo, e) = (self.top[bin], self.eye_lo[bin], self.eye_hi[bin]);
+            let (da, db) = (self.bins.dirs[bin], self.bins.dirs[bin + 1]);
+            let stairs = &mut self.stairs[bin];
+            let mut best = stairs.last().copied();
+            let mut r = 0.0f64;
+            while r < reach {
+                // Half a pixel near the eye, so that a wall two pixels thick holds a
+                // whole sector; about square sectors farther out.
+                let r1 = r + (0.5 * d).max(r * w);
+                // Bounding box of the annular sector, grown by the arc's bulge.
+                let bulge = r1 * bulge_k + 1e-9;
+                let pts = [da * r, db * r, da * r1, db * r1];
+                let mut bb = Aabb2::from_points(&pts).expand(bulge);
+                bb.min += eye;
+                bb.max += eye;
+                let h = grid.min_over(bb) as f64 * DM;
+                if h > e_lo && best.is_none_or(|(_, hb)| h > hb) {
+                    insert_blocker(stairs, r + EPS_M, h);
+                    best = Some((r + EPS_M, h));
                 }
-                self.bin_sectors(bin, &hits[i..j], h);
-                i = j;
-            }
-            self.scratch = hits;
-        }
-    }
-
-    /// Merge the radial ranges of the boundary in one bin into clusters; the gaps are
-    /// boundary-free annular sectors, inside the polygon iff the middle ray crosses the
-    /// boundary an odd number of times beyond them.
-    fn bin_sectors(&mut self, bin: usize, hits: &[Hit], h: f64) {
-        // clusters: (lo, hi, parity)
-        let mut clusters: Vec<(f64, f64, bool)> = Vec::new();
-        for hit in hits {
-            match clusters.last_mut() {
-                Some(c) if hit.lo <= c.1 => {
-                    c.1 = c.1.max(hit.hi);
-                    c.2 ^= hit.crosses_mid;
+                if let Some((ra, h)) = best {
+                    if h > e && (top - e) * ra < (h - e) * r1 {
+                        break;
+                    }
                 }
-                _ => clusters.push((hit.lo, hit.hi, hit.crosses_mid)),
-            }
-        }
-        let mut inside = false;
-        for idx in (0..clusters.len()).rev() {
-            inside ^= clusters[idx].2;
-            if inside {
-                let ra = if idx == 0 { 0.0 } else { clusters[idx - 1].1 };
-                let rb = clusters[idx].0;
-                if rb - ra > MIN_SECTOR_M {
-                    insert_blocker(&mut self.stairs[bin], ra + EPS_M, h);
-                }
+                r = r1;
             }
         }
     }
@@ -390,33 +326,49 @@ fn insert_blocker(stairs: &mut Vec<(f64, f64)>, ra: f64, h: f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::erosion::field::Grid;
 
-    fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Vec<Vec<DVec2>> {
-        vec![vec![
+    fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Vec<DVec2> {
+        vec![
             DVec2::new(x0, y0),
             DVec2::new(x1, y0),
             DVec2::new(x1, y1),
             DVec2::new(x0, y1),
-        ]]
+        ]
     }
 
-    fn target(bins: &Bins, r: Vec<Vec<DVec2>>) -> Target {
-        Target::new(bins, &[(r[0].clone(), true)])
+    /// A raster around the eye at the origin with the given walls (world = eye frame).
+    fn grid(walls: &[(f64, f64, f64, f64, f64)]) -> Grid {
+        let mut g = Grid::zeros(DVec2::splat(-50.0), 0.25, 400, 400);
+        for j in 0..400 {
+            for i in 0..400 {
+                let (x, y) = (-50.0 + i as f64 * 0.25, -50.0 + j as f64 * 0.25);
+                for &(x0, y0, x1, y1, h) in walls {
+                    if x >= x0 && x + 0.25 <= x1 && y >= y0 && y + 0.25 <= y1 {
+                        g.data[(j * 400 + i) as usize] = (h / DM) as u16;
+                    }
+                }
+            }
+        }
+        g
     }
 
-    fn map_with(polys: &[Vec<Vec<DVec2>>], h: f64, t: &Target) -> PolarMap {
-        let mut m = PolarMap::new(Bins::new(512));
-        m.need(t);
-        m.add_level(polys, h);
+    fn map_with(walls: &[(f64, f64, f64, f64, f64)], t: &Target, bins: Bins) -> PolarMap {
+        let mut m = PolarMap::new(bins);
+        m.need(t, 2.0, 50.0);
+        m.march(&MinPyramid::new(grid(walls)), DVec2::ZERO);
         m
+    }
+
+    fn target(bins: &Bins, r: Vec<DVec2>) -> Target {
+        Target::new(bins, &[(r, true)])
     }
 
     #[test]
     fn wall_hides_low_block_not_tower() {
         let bins = Bins::new(512);
-        let wall = rect(10.0, -30.0, 11.0, 30.0);
         let behind = target(&bins, rect(20.0, -5.0, 30.0, 5.0));
-        let m = map_with(&[wall], 10.0, &behind);
+        let m = map_with(&[(10.0, -30.0, 11.0, 30.0, 10.0)], &behind, bins);
         // Eye at 2 m: a 9 m block 20 m away behind a 10 m wall 10 m away is hidden...
         assert!(m.hidden(&behind, 2.0, 9.0));
         // ... a 40 m tower is not ((40-2)/20 > (10-2)/10).
@@ -428,18 +380,20 @@ mod tests {
     #[test]
     fn gap_between_walls_is_open() {
         let bins = Bins::new(512);
-        let walls = [rect(10.0, -30.0, 11.0, -0.5), rect(10.0, 0.5, 11.0, 30.0)];
         let behind = target(&bins, rect(20.0, -5.0, 30.0, 5.0));
-        let m = map_with(&walls, 10.0, &behind);
+        let walls = [
+            (10.0, -30.0, 11.0, -0.5, 10.0),
+            (10.0, 0.5, 11.0, 30.0, 10.0),
+        ];
+        let m = map_with(&walls, &behind, bins);
         assert!(!m.hidden(&behind, 2.0, 0.0));
     }
 
     #[test]
     fn eye_inside_occluder_blocks_everything() {
         let bins = Bins::new(64);
-        let around = rect(-5.0, -5.0, 5.0, 5.0);
         let far = target(&bins, rect(20.0, -5.0, 30.0, 5.0));
-        let m = map_with(&[around], 10.0, &far);
+        let m = map_with(&[(-5.0, -5.0, 5.0, 5.0, 10.0)], &far, bins);
         assert!(m.hidden(&far, 2.0, 9.0));
     }
 
@@ -448,7 +402,7 @@ mod tests {
         let bins = Bins::new(64);
         let t = target(&bins, rect(-5.0, -5.0, 5.0, 5.0));
         assert!(t.at_eye);
-        let m = map_with(&[rect(-1.0, -1.0, 1.0, 1.0)], 10.0, &t);
+        let m = map_with(&[(-1.0, -1.0, 1.0, 1.0, 10.0)], &t, bins);
         assert!(!m.hidden(&t, 2.0, 0.0));
     }
 }
