@@ -103,8 +103,11 @@ fn offsets(lo: f64, hi: f64, pixel_m: f64) -> (i64, i64) {
 }
 
 /// `x`, or the nearest integer if it is within 1e-9 of it.
+#[inline]
 pub(crate) fn snap(x: f64) -> f64 {
-    let r = x.round();
+    // Nearest integer without a libm call (hot in the occlusion-map march).
+    let t = (x + 0.5) as i64;
+    let r = if (t as f64) > x + 0.5 { t - 1 } else { t } as f64;
     if (x - r).abs() < 1e-9 {
         r
     } else {

@@ -21,6 +21,12 @@
 //!   and farthest depth, stopping once the horizon is closed (§7 "Scaling"); occludees
 //!   with outer coverage and nearest depth.
 //!
+//! Hierarchy (§7 "Bad scenario" and "Viewcells"): Theorem 1 erodes every occluder by
+//! the whole cell, so a 25 m cell in a city of 15 m deep building rows sees through
+//! everything. The PVS of a cell is the union of the PVS of its parts, and what is
+//! hidden from a cell is hidden from its parts: `refine` tests the cell, then its
+//! quarters for what it may see, down to [`MAX_DEPTH`] levels (≥ [`MIN_SUBCELL_M`]).
+//!
 //! Vertical erosion (§3.4): the occluders united with the ground form a height field
 //! whose columns extend to −∞, so eroding by the cell's height segment only moves
 //! the viewpoint: a height field blocks a sight line only if it blocks every lower
