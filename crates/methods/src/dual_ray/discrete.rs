@@ -16,16 +16,33 @@
 //!   the test is exact in `u` at any column resolution.
 //!
 //! Intervals must overlap by `eps` to count as joined: rounding can only turn a white
-//! pixel black, never the reverse. Hierarchy (§5.2, last paragraph): 16 bands first;
-//! only bands that are not fully covered are split in two, down to `N` bands. A black
-//! band at resolution `N` means "visible".
+//! pixel black, never the reverse. Most rows are decided without the sort of the sweep
+//! by two bit-parallel `u128` rows of 128 columns ([`band_covered`]). Hierarchy (§5.2,
+//! last paragraph): 16 bands first (here 4, which decides the same, see
+//! [`START_LEVEL`]); only bands that are not fully covered are split in two, down to `N`
+//! bands. A black band at resolution `N` means "visible".
 
 use super::plane::{Planar, Scratch};
 
-/// Number of bands of the first, coarsest level.
+/// Number of bands of the first level of the paper (§5.2: 16² first).
 pub(crate) const FIRST_LEVEL: u32 = 16;
 
+/// Number of bands the refinement starts from at resolutions of at least
+/// [`FIRST_LEVEL`]. A band covered at a coarse level has every sub-band covered (the
+/// blocked intervals only grow as a band narrows, and rounding of `g_p(w)` is monotone
+/// in `w`), so starting coarser than 16 decides exactly the same rows and answers the
+/// same; it only settles the easy cases — occluders next to the cell, whose `g_p`
+/// barely depend on `w` — in a few bands instead of 16.
+const START_LEVEL: u32 = 4;
+
 /// Whether the band `[w0, w1]` is fully covered by the union of the pieces and masks.
+///
+/// Two bit-parallel 128-column rows answer most bands without sorting (the sort of the
+/// exact sweep dominated the cost): `full` has a bit for each column lying inside some
+/// interval shrunk by `3·eps`, `touch` one for each column meeting some interval grown
+/// by `3·eps`. All of `full` set means every point of `[u_lo, u_hi]` lies `3·eps` deep in
+/// an interval, which is what [`covers`] accepts; a clear bit of `touch` means a column
+/// whose points lie in no interval: a gap. Only rows in between are swept exactly.
 pub(crate) fn band_covered(p: &Planar, w0: f64, w1: f64, iv: &mut Vec<(f64, f64)>) -> bool {
     iv.clear();
     p.mask_band(w0, w1, iv);
@@ -35,7 +52,101 @@ pub(crate) fn band_covered(p: &Planar, w0: f64, w1: f64, iv: &mut Vec<(f64, f64)
             iv.push((lo, hi));
         }
     }
+    let span = p.u_hi - p.u_lo;
+    let m = 3.0 * p.eps;
+    if span > 64.0 * m {
+        let cols = COLUMNS as f64;
+        let scale = cols / span;
+        let (mut full, mut touch) = (0u128, 0u128);
+        for (k, &(lo, hi)) in iv.iter().enumerate() {
+            // The pieces come nearest the cell first: most covered rows fill up early.
+            if k % 8 == 7 && full == u128::MAX {
+                return true;
+            }
+            // Columns j with [u_j, u_j+1] ⊂ [lo + m, hi - m].
+            let j0 = ceil_in_row((lo + m - p.u_lo) * scale);
+            let j1 = floor_in_row((hi - m - p.u_lo) * scale) - 1.0;
+            full |= column_mask(j0, j1);
+            // Columns j meeting [lo - m, hi + m].
+            let k0 = floor_in_row((lo - m - p.u_lo) * scale);
+            let k1 = floor_in_row((hi + m - p.u_lo) * scale);
+            touch |= column_mask(k0, k1);
+        }
+        if full == u128::MAX {
+            return true;
+        }
+        if touch != u128::MAX {
+            return false;
+        }
+    }
     covers(iv, p.u_lo, p.u_hi, p.eps)
+}
+
+/// `floor(x)` for the column indices of [`band_covered`], clamped to `[-2, COLUMNS + 2]`
+/// first (inlined: `f64::floor` is a libm call without SSE4.1). NaN stays NaN.
+#[inline]
+fn floor_in_row(x: f64) -> f64 {
+    if x.is_nan() {
+        return x;
+    }
+    let x = x.clamp(-2.0, (COLUMNS + 2) as f64);
+    let t = x as i32 as f64;
+    if t > x {
+        t - 1.0
+    } else {
+        t
+    }
+}
+
+/// `ceil(x)`, clamped like [`floor_in_row`].
+#[inline]
+fn ceil_in_row(x: f64) -> f64 {
+    if x.is_nan() {
+        return x;
+    }
+    let x = x.clamp(-2.0, (COLUMNS + 2) as f64);
+    let t = x as i32 as f64;
+    if t < x {
+        t + 1.0
+    } else {
+        t
+    }
+}
+
+/// Columns of the bit-parallel rows of [`band_covered`].
+pub(crate) const COLUMNS: u32 = 128;
+
+/// The `touch` row of [`band_covered`] for the intervals `iv` over `[u_lo, u_lo + span]`:
+/// a clear bit is a column no interval grown by `m` meets.
+pub(crate) fn touch_row(iv: &[(f64, f64)], u_lo: f64, span: f64, m: f64) -> u128 {
+    let scale = COLUMNS as f64 / span;
+    let mut touch = 0u128;
+    for &(lo, hi) in iv {
+        let k0 = floor_in_row((lo - m - u_lo) * scale);
+        let k1 = floor_in_row((hi + m - u_lo) * scale);
+        touch |= column_mask(k0, k1);
+    }
+    touch
+}
+
+/// The bits `j0..=j1` of a row (clamped to the row; `0` when empty or NaN).
+#[inline]
+pub(crate) fn column_mask(j0: f64, j1: f64) -> u128 {
+    if j0.is_nan() || j1.is_nan() {
+        return 0;
+    }
+    let top = (COLUMNS - 1) as f64;
+    let (a, b) = (j0.max(0.0), j1.min(top));
+    if !(a <= b) {
+        return 0;
+    }
+    let (a, b) = (a as u32, b as u32);
+    let upto = if b >= COLUMNS - 1 {
+        u128::MAX
+    } else {
+        (1u128 << (b + 1)) - 1
+    };
+    upto & !((1u128 << a) - 1)
 }
 
 /// Whether the closed intervals cover `[a, b]`, each joint overlapping by `eps`.
@@ -64,7 +175,11 @@ pub(crate) fn hidden(scratch: &mut Scratch, resolution: u32) -> bool {
     if w_hi.is_nan() || w_lo.is_nan() || w_hi < w_lo {
         return false;
     }
-    let first = FIRST_LEVEL.min(resolution.max(1));
+    let first = if resolution >= FIRST_LEVEL {
+        START_LEVEL
+    } else {
+        resolution.max(1)
+    };
     let bands = &mut scratch.bands;
     bands.clear();
     let dw = (w_hi - w_lo) / first as f64;
@@ -94,6 +209,33 @@ pub(crate) fn hidden(scratch: &mut Scratch, resolution: u32) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn floors() {
+        for x in [-1.5, -1.0, -0.5, 0.0, 0.25, 1.0, 3.7, 127.9, 128.0] {
+            assert_eq!(floor_in_row(x), x.floor(), "{x}");
+        }
+        for x in [-1.5, -1.0, -0.5, 0.0, 0.25, 1.0, 3.7, 127.9, 128.0] {
+            assert_eq!(ceil_in_row(x), x.ceil(), "{x}");
+        }
+        assert_eq!(ceil_in_row(1e300), 130.0);
+        assert_eq!(ceil_in_row(-1e300), -2.0);
+        assert!(ceil_in_row(f64::NAN).is_nan());
+        assert_eq!(floor_in_row(-1e300), -2.0);
+        assert_eq!(floor_in_row(f64::INFINITY), 130.0);
+        assert!(floor_in_row(f64::NAN).is_nan());
+    }
+
+    #[test]
+    fn column_masks() {
+        assert_eq!(column_mask(0.0, 0.0), 1);
+        assert_eq!(column_mask(2.0, 3.0), 0b1100);
+        assert_eq!(column_mask(-5.0, 500.0), u128::MAX);
+        assert_eq!(column_mask(3.0, 2.0), 0);
+        assert_eq!(column_mask(f64::NAN, 2.0), 0);
+        assert_eq!(column_mask(127.0, f64::INFINITY), 1u128 << 127);
+        assert_eq!(column_mask(f64::NEG_INFINITY, -1.0), 0);
+    }
 
     #[test]
     fn covers_needs_overlap() {
