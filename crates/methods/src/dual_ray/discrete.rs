@@ -46,40 +46,73 @@ const START_LEVEL: u32 = 4;
 pub(crate) fn band_covered(p: &Planar, w0: f64, w1: f64, iv: &mut Vec<(f64, f64)>) -> bool {
     iv.clear();
     p.mask_band(w0, w1, iv);
+    let span = p.u_hi - p.u_lo;
+    let m = 3.0 * p.eps;
+    if span > 64.0 * m {
+        let mut row = Rows {
+            u_lo: p.u_lo,
+            scale: COLUMNS as f64 / span,
+            m,
+            full: 0,
+            touch: 0,
+        };
+        for &(lo, hi) in iv.iter() {
+            row.add(lo, hi);
+        }
+        for &i in &p.on_fb {
+            let (lo, hi) = p.piece_band(i as usize, w0, w1);
+            row.add(lo, hi);
+        }
+        // The pieces come nearest the cell first: most covered rows fill up early.
+        for chunk in p.lines.chunks(8) {
+            for l in chunk {
+                let lo = (l[0] - l[1] * w0).min(l[2] - l[3] * w0);
+                let hi = (l[4] - l[5] * w1).max(l[6] - l[7] * w1);
+                row.add(lo, hi);
+            }
+            if row.full == u128::MAX {
+                return true;
+            }
+        }
+        if row.full == u128::MAX {
+            return true;
+        }
+        if row.touch != u128::MAX {
+            return false;
+        }
+    }
     for i in 0..p.duals.len() {
         let (lo, hi) = p.piece_band(i, w0, w1);
         if hi > lo && hi > p.u_lo && lo < p.u_hi {
             iv.push((lo, hi));
         }
     }
-    let span = p.u_hi - p.u_lo;
-    let m = 3.0 * p.eps;
-    if span > 64.0 * m {
-        let cols = COLUMNS as f64;
-        let scale = cols / span;
-        let (mut full, mut touch) = (0u128, 0u128);
-        for (k, &(lo, hi)) in iv.iter().enumerate() {
-            // The pieces come nearest the cell first: most covered rows fill up early.
-            if k % 8 == 7 && full == u128::MAX {
-                return true;
-            }
+    covers(iv, p.u_lo, p.u_hi, p.eps)
+}
+
+/// The two bit-parallel rows of [`band_covered`].
+struct Rows {
+    u_lo: f64,
+    scale: f64,
+    m: f64,
+    full: u128,
+    touch: u128,
+}
+
+impl Rows {
+    #[inline]
+    fn add(&mut self, lo: f64, hi: f64) {
+        if hi > lo {
             // Columns j with [u_j, u_j+1] ⊂ [lo + m, hi - m].
-            let j0 = ceil_in_row((lo + m - p.u_lo) * scale);
-            let j1 = floor_in_row((hi - m - p.u_lo) * scale) - 1.0;
-            full |= column_mask(j0, j1);
+            let j0 = ceil_in_row((lo + self.m - self.u_lo) * self.scale);
+            let j1 = floor_in_row((hi - self.m - self.u_lo) * self.scale) - 1.0;
+            self.full |= column_mask(j0, j1);
             // Columns j meeting [lo - m, hi + m].
-            let k0 = floor_in_row((lo - m - p.u_lo) * scale);
-            let k1 = floor_in_row((hi + m - p.u_lo) * scale);
-            touch |= column_mask(k0, k1);
-        }
-        if full == u128::MAX {
-            return true;
-        }
-        if touch != u128::MAX {
-            return false;
+            let k0 = floor_in_row((lo - self.m - self.u_lo) * self.scale);
+            let k1 = floor_in_row((hi + self.m - self.u_lo) * self.scale);
+            self.touch |= column_mask(k0, k1);
         }
     }
-    covers(iv, p.u_lo, p.u_hi, p.eps)
 }
 
 /// `floor(x)` for the column indices of [`band_covered`], clamped to `[-2, COLUMNS + 2]`

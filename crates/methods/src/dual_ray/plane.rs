@@ -205,6 +205,12 @@ pub(crate) struct Planar {
     pub w_hi: f64,
     pub pieces: Vec<Piece>,
     pub duals: Vec<DualPiece>,
+    /// The pieces with no vertex on `F_B`, as the lines `g = alpha - beta·w` of their
+    /// two bottom and two top vertices (`[ab0, bb0, ab1, bb1, at0, bt0, at1, bt1]`):
+    /// the branch-free form of [`Planar::piece_band`].
+    pub lines: Vec<[f64; 8]>,
+    /// Indices of the other pieces (a vertex on `F_B`), answered by `piece_band`.
+    pub on_fb: Vec<u32>,
     /// Coverage tolerance in `u` (metres): coverage must overlap by this much.
     pub eps: f64,
     /// The shaft in scene-local coordinates: faces at `xa < xb`, centre line `yc`,
@@ -304,6 +310,8 @@ impl Planar {
         p.eps = 1e-9 * (1.0 + (u_hi - u_lo).max(w_hi - w_lo).max(p.len));
         p.pieces.clear();
         p.duals.clear();
+        p.lines.clear();
+        p.on_fb.clear();
         p.xa = xa;
         p.xb = xb;
         p.yc = yc;
@@ -356,6 +364,17 @@ impl Planar {
             b: [Dual::new(q.x0, q.yb0, len), Dual::new(q.x1, q.yb1, len)],
             t: [Dual::new(q.x0, q.yt0, len), Dual::new(q.x1, q.yt1, len)],
         }));
+        for (i, d) in p.duals.iter().enumerate() {
+            let [b0, b1] = d.b;
+            let [t0, t1] = d.t;
+            if b0.on_fb || b1.on_fb || t0.on_fb || t1.on_fb {
+                p.on_fb.push(i as u32);
+            } else {
+                p.lines.push([
+                    b0.alpha, b0.beta, b1.alpha, b1.beta, t0.alpha, t0.beta, t1.alpha, t1.beta,
+                ]);
+            }
+        }
     }
 
     /// Whether the ray `(u, w)` misses every occluder piece of the part of the shaft
