@@ -66,8 +66,19 @@ pub(crate) fn band_covered(p: &Planar, w0: f64, w1: f64, iv: &mut Vec<(f64, f64)
         // The pieces come nearest the cell first: most covered rows fill up early.
         for chunk in p.lines.chunks(8) {
             for l in chunk {
-                let lo = (l[0] - l[1] * w0).min(l[2] - l[3] * w0);
-                let hi = (l[4] - l[5] * w1).max(l[6] - l[7] * w1);
+                // NaN lines (pieces on F_B, done above) add nothing: `hi > lo` fails.
+                let lo = l[0] - l[1] * w0;
+                let lo = if lo < l[2] - l[3] * w0 {
+                    lo
+                } else {
+                    l[2] - l[3] * w0
+                };
+                let hi = l[4] - l[5] * w1;
+                let hi = if hi > l[6] - l[7] * w1 {
+                    hi
+                } else {
+                    l[6] - l[7] * w1
+                };
                 row.add(lo, hi);
             }
             if row.full == u128::MAX {
@@ -200,8 +211,31 @@ pub(crate) fn covers(iv: &mut [(f64, f64)], a: f64, b: f64, eps: f64) -> bool {
     false
 }
 
+/// A band of the refinement of [`hidden`]: rows `[w0, w1]` at level `n`, the pieces
+/// that can still matter (`lists[first..first + len]`, or all when `len == ALL`) and the
+/// `full` row of the parent band.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Band {
+    w0: f64,
+    w1: f64,
+    n: u32,
+    first: u32,
+    len: u32,
+    seed: u128,
+}
+
+const ALL: u32 = u32::MAX;
+
 /// §5.2 with hierarchical refinement: `true` when every pixel of the `resolution`-row
 /// ray space is covered (the boxes are hidden from each other).
+///
+/// A sub-band only sees the intervals of its parent grow (`[H(w0'), G(w1')] ⊇
+/// [H(w0), G(w1)]`), so each band hands its children its `full` row as a start, and
+/// only the pieces whose intervals can still reach a column it left uncovered: over any
+/// sub-band a piece blocks at most its hull `[H(w1), G(w0)]`. A piece whose hull lies in
+/// covered columns adds nothing the children do not already have (to `full` nor to
+/// `touch`, whose clear bits are then still gaps). Deep rows thus test a few pieces
+/// instead of all.
 pub(crate) fn hidden(scratch: &mut Scratch, resolution: u32) -> bool {
     let p = &scratch.planar;
     let (w_lo, w_hi) = (p.w_lo, p.w_hi);
@@ -213,6 +247,133 @@ pub(crate) fn hidden(scratch: &mut Scratch, resolution: u32) -> bool {
     } else {
         resolution.max(1)
     };
+    let span = p.u_hi - p.u_lo;
+    let m = 3.0 * p.eps;
+    if !(span > 64.0 * m) {
+        return hidden_plain(scratch, first, resolution);
+    }
+    let scale = COLUMNS as f64 / span;
+    let bands = &mut scratch.refine;
+    let lists = &mut scratch.lists;
+    let iv = &mut scratch.intervals;
+    bands.clear();
+    lists.clear();
+    let dw = (w_hi - w_lo) / first as f64;
+    for k in (0..first).rev() {
+        let w0 = w_lo + dw * k as f64;
+        let w1 = if k + 1 == first {
+            w_hi
+        } else {
+            w_lo + dw * (k + 1) as f64
+        };
+        bands.push(Band {
+            w0,
+            w1,
+            n: first,
+            first: 0,
+            len: ALL,
+            seed: 0,
+        });
+    }
+    let n_pieces = p.duals.len() as u32;
+    while let Some(b) = bands.pop() {
+        // Lists after this band's belong to finished bands.
+        let (s, l) = if b.len == ALL {
+            lists.clear();
+            (0, n_pieces)
+        } else {
+            lists.truncate((b.first + b.len) as usize);
+            (b.first, b.len)
+        };
+        let piece = |lists: &[u32], k: u32| if b.len == ALL { k } else { lists[k as usize] };
+        let mut row = Rows {
+            u_lo: p.u_lo,
+            scale,
+            m,
+            full: b.seed,
+            touch: b.seed,
+        };
+        iv.clear();
+        p.mask_band(b.w0, b.w1, iv);
+        for &(lo, hi) in iv.iter() {
+            row.add(lo, hi);
+        }
+        let mut covered = false;
+        for k in s..s + l {
+            let (lo, hi) = p.piece_band_fast(piece(lists, k) as usize, b.w0, b.w1);
+            row.add(lo, hi);
+            if k % 8 == 7 && row.full == u128::MAX {
+                covered = true;
+                break;
+            }
+        }
+        if covered || row.full == u128::MAX {
+            continue;
+        }
+        if row.touch == u128::MAX {
+            // Undecided by the rows: the exact sweep, over the band's pieces and the
+            // parent's covered columns (a subset of the blocked rays).
+            for k in s..s + l {
+                let (lo, hi) = p.piece_band_fast(piece(lists, k) as usize, b.w0, b.w1);
+                if hi > lo && hi > p.u_lo && lo < p.u_hi {
+                    iv.push((lo, hi));
+                }
+            }
+            let mut seed = b.seed;
+            let mut j = 0u32;
+            while seed != 0 {
+                let skip = seed.trailing_zeros();
+                seed >>= skip;
+                j += skip;
+                let run = (!seed).trailing_zeros();
+                // A run of full columns lies `m = 3·eps` deep in the blocked rays.
+                iv.push((
+                    p.u_lo + j as f64 / scale - 2.0 * p.eps,
+                    p.u_lo + (j + run) as f64 / scale + 2.0 * p.eps,
+                ));
+                seed = if run >= 128 { 0 } else { seed >> run };
+                j += run;
+            }
+            if covers(iv, p.u_lo, p.u_hi, p.eps) {
+                continue;
+            }
+        }
+        if b.n >= resolution {
+            return false;
+        }
+        // The pieces whose hull over the band meets a column left uncovered.
+        let start = lists.len() as u32;
+        for k in s..s + l {
+            let i = piece(lists, k);
+            let (lo, hi) = p.piece_band_fast(i as usize, b.w1, b.w0);
+            if hi > lo {
+                let k0 = floor_in_row((lo - m - p.u_lo) * scale);
+                let k1 = floor_in_row((hi + m - p.u_lo) * scale);
+                if column_mask(k0, k1) & !row.full != 0 {
+                    lists.push(i);
+                }
+            }
+        }
+        let len = lists.len() as u32 - start;
+        let wm = 0.5 * (b.w0 + b.w1);
+        for (w0, w1) in [(wm, b.w1), (b.w0, wm)] {
+            bands.push(Band {
+                w0,
+                w1,
+                n: b.n * 2,
+                first: start,
+                len,
+                seed: row.full,
+            });
+        }
+    }
+    true
+}
+
+/// [`hidden`] without the rows (a shaft too narrow in `u` for 128 columns).
+fn hidden_plain(scratch: &mut Scratch, first: u32, resolution: u32) -> bool {
+    let p = &scratch.planar;
+    let (w_lo, w_hi) = (p.w_lo, p.w_hi);
     let bands = &mut scratch.bands;
     bands.clear();
     let dw = (w_hi - w_lo) / first as f64;
@@ -241,7 +402,58 @@ pub(crate) fn hidden(scratch: &mut Scratch, resolution: u32) -> bool {
 
 #[cfg(test)]
 mod tests {
+    use super::super::occluders::Axis;
+    use super::super::plane::local_rect;
+    use super::super::{DualRay, Planarity};
     use super::*;
+    use sightline_geom::{Aabb3, DVec3};
+    use sightline_scene::generate::{city, metropolis};
+    use std::sync::Arc;
+
+    /// The refinement with piece lists and seeded rows answers exactly as the plain one
+    /// (every band over every piece) on the shafts of a random city and a grid city.
+    #[test]
+    fn refinement_with_piece_lists_answers_as_the_plain_one() {
+        let mut counts = [0usize; 2];
+        for (scene, cell) in [
+            (city(11, 300), [0.0, 0.0, 1.5, 20.0, 20.0, 2.0]),
+            (metropolis(5, 600), [210.0, 210.0, 0.0, 230.0, 230.0, 2.0]),
+        ] {
+            let m = DualRay::new("dual-ray", Arc::new(scene), Planarity::Exact);
+            let o3 = m.origin.extend(0.0);
+            let a = Aabb3::new(
+                DVec3::new(cell[0], cell[1], cell[2]) - o3,
+                DVec3::new(cell[3], cell[4], cell[5]) - o3,
+            );
+            let mut scratch = Scratch::default();
+            for (_, b) in &m.tree.items {
+                for axis in [Axis::X, Axis::Y] {
+                    let (ra, rb) = (local_rect(&a, axis), local_rect(b, axis));
+                    let cell_low = ra.x1 < rb.x0;
+                    if !cell_low && rb.x1 >= ra.x0 {
+                        continue;
+                    }
+                    let (lo, lo_top, hi, hi_top) = if cell_low {
+                        (ra, a.max.z, rb, b.max.z)
+                    } else {
+                        (rb, b.max.z, ra, a.max.z)
+                    };
+                    let decomp = match axis {
+                        Axis::X => &m.decomp_x,
+                        Axis::Y => &m.decomp_y,
+                    };
+                    Planar::build(&mut scratch, decomp, lo, lo_top, hi, hi_top, None, cell_low);
+                    for res in [16, 64, 256] {
+                        let h = hidden(&mut scratch, res);
+                        let plain = hidden_plain(&mut scratch, START_LEVEL, res);
+                        assert_eq!(h, plain, "{cell:?} {b:?} {axis:?} {res}");
+                        counts[h as usize] += 1;
+                    }
+                }
+            }
+        }
+        assert!(counts[0] > 100 && counts[1] > 100, "{counts:?}");
+    }
 
     #[test]
     fn floors() {

@@ -205,11 +205,11 @@ pub(crate) struct Planar {
     pub w_hi: f64,
     pub pieces: Vec<Piece>,
     pub duals: Vec<DualPiece>,
-    /// The pieces with no vertex on `F_B`, as the lines `g = alpha - beta·w` of their
-    /// two bottom and two top vertices (`[ab0, bb0, ab1, bb1, at0, bt0, at1, bt1]`):
-    /// the branch-free form of [`Planar::piece_band`].
+    /// Per piece, the lines `g = alpha - beta·w` of its two bottom and two top vertices
+    /// (`[ab0, bb0, ab1, bb1, at0, bt0, at1, bt1]`): the branch-free form of
+    /// [`Planar::piece_band`]; NaN for the pieces with a vertex on `F_B`.
     pub lines: Vec<[f64; 8]>,
-    /// Indices of the other pieces (a vertex on `F_B`), answered by `piece_band`.
+    /// Indices of the pieces with a vertex on `F_B`, answered by `piece_band`.
     pub on_fb: Vec<u32>,
     /// Coverage tolerance in `u` (metres): coverage must overlap by this much.
     pub eps: f64,
@@ -244,6 +244,9 @@ pub(crate) struct Scratch {
     pub kept: Vec<(f64, f64)>,
     pub intervals: Vec<(f64, f64)>,
     pub bands: Vec<(f64, f64, u32)>,
+    /// Refinement of [`super::discrete::hidden`]: bands and their piece lists.
+    pub refine: Vec<super::discrete::Band>,
+    pub lists: Vec<u32>,
     /// Pieces of the ungathered part of a shaft, met by a candidate ray.
     pub far: Vec<Piece>,
     /// Candidate rays `(gap width, u, w)`.
@@ -369,6 +372,7 @@ impl Planar {
             let [t0, t1] = d.t;
             if b0.on_fb || b1.on_fb || t0.on_fb || t1.on_fb {
                 p.on_fb.push(i as u32);
+                p.lines.push([f64::NAN; 8]);
             } else {
                 p.lines.push([
                     b0.alpha, b0.beta, b1.alpha, b1.beta, t0.alpha, t0.beta, t1.alpha, t1.beta,
@@ -438,6 +442,18 @@ impl Planar {
             }
         }
         true
+    }
+
+    /// [`Planar::piece_band`] through the branch-free lines where they exist.
+    #[inline]
+    pub(crate) fn piece_band_fast(&self, i: usize, w0: f64, w1: f64) -> (f64, f64) {
+        let l = &self.lines[i];
+        if l[0].is_nan() {
+            return self.piece_band(i, w0, w1);
+        }
+        let lo = (l[0] - l[1] * w0).min(l[2] - l[3] * w0);
+        let hi = (l[4] - l[5] * w1).max(l[6] - l[7] * w1);
+        (lo, hi)
     }
 
     /// The rays `u` blocked by piece `i` for every `w` of the band `[w0, w1]`:
