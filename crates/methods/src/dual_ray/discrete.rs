@@ -160,6 +160,15 @@ fn ceil_in_row(x: f64) -> f64 {
 /// Columns of the bit-parallel rows of [`band_covered`].
 pub(crate) const COLUMNS: u32 = 128;
 
+/// The `touch` bits of one interval `[lo, hi]` (see [`touch_row`]).
+#[inline]
+pub(crate) fn touch_interval(lo: f64, hi: f64, u_lo: f64, span: f64, m: f64) -> u128 {
+    let scale = COLUMNS as f64 / span;
+    let k0 = floor_in_row((lo - m - u_lo) * scale);
+    let k1 = floor_in_row((hi + m - u_lo) * scale);
+    column_mask(k0, k1)
+}
+
 /// The `touch` row of [`band_covered`] for the intervals `iv` over `[u_lo, u_lo + span]`:
 /// a clear bit is a column no interval grown by `m` meets.
 pub(crate) fn touch_row(iv: &[(f64, f64)], u_lo: f64, span: f64, m: f64) -> u128 {

@@ -16,7 +16,7 @@
 //! pieces and then against the rest of the shaft along its own line only
 //! ([`Planar::far_ray_clear`]), stopping at the first piece that blocks it.
 
-use super::discrete::{touch_row, COLUMNS};
+use super::discrete::{touch_interval, touch_row, COLUMNS};
 use super::exact::ray_is_clear;
 use super::occluders::Decomposition;
 use super::plane::{Planar, Scratch};
@@ -63,13 +63,14 @@ fn gather_candidates(scratch: &mut Scratch) {
         let w = w_lo + (w_hi - w_lo) * ((k as f64 + 0.5) / SAMPLES as f64);
         iv.clear();
         p.mask_band(w, w, iv);
+        let mut touch = touch_row(iv, p.u_lo, span, m);
         for i in 0..p.duals.len() {
-            let (lo, hi) = p.piece_band(i, w, w);
-            if hi >= lo && hi >= p.u_lo && lo <= p.u_hi {
-                iv.push((lo, hi));
+            let (lo, hi) = p.piece_band_fast(i, w, w);
+            if hi >= lo {
+                touch |= touch_interval(lo, hi, p.u_lo, span, m);
             }
         }
-        let mut free = !touch_row(iv, p.u_lo, span, m);
+        let mut free = !touch;
         let mut j = 0u32;
         while free != 0 {
             let skip = free.trailing_zeros();
