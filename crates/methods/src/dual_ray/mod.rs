@@ -20,8 +20,16 @@
 //!   (their outer prisms' boxes);
 //! * [`plane`] — reduction of a box-to-box test to a planar problem (§4): upper rims,
 //!   shaft, ceiling plane `T`, occluders cut by `T`, dual ray space `RS`;
-//! * [`discrete`] — §5.2 with exact union coverage per row (NOTES §2);
-//! * [`exact`] — §5.1 with exact predicates.
+//! * [`discrete`] — §5.2 with exact union coverage per row (NOTES §2), most rows decided
+//!   by bit-parallel `u128` rows, refined with per-band lists of the pieces that matter;
+//! * [`exact`] — §5.1 with exact predicates;
+//! * [`witness`] — a single ray verified clear (exact predicates) answers "visible"
+//!   without gathering the whole shaft; it changes no answer of either planar method.
+//!
+//! Order of one box-to-box test along an axis: the occluders near the cell are gathered
+//! first; a witness ray from their gaps, checked along its own line to the far box,
+//! settles "visible"; else their coverage may already settle "hidden"; only then is the
+//! whole shaft gathered and tested.
 //!
 //! Degenerate configurations: boxes overlapping in both x and y (the cell inside a
 //! node, an object straddling the cell) have no separating planes and count as visible;
