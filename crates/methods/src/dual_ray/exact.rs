@@ -19,7 +19,7 @@
 //! a pair hidden for `dual-ray` at any resolution is hidden here too.
 
 use super::discrete::{band_covered, FIRST_LEVEL};
-use super::plane::{Planar, Rect, Scratch};
+use super::plane::{ray_misses_piece, Planar, Rect, Scratch};
 use sightline_geom::{orient2d, DVec2, Orientation};
 
 /// Deepest refinement, as a power of two of the number of first-level bands.
@@ -105,15 +105,7 @@ pub(crate) fn ray_is_clear(p: &Planar, u: f64, w: f64) -> bool {
     if !crosses_rect(a, b, &p.lo) || !crosses_rect(a, b, &p.hi) {
         return false;
     }
-    p.pieces.iter().all(|q| {
-        let s = [
-            orient2d(a, b, DVec2::new(q.x0, q.yb0)),
-            orient2d(a, b, DVec2::new(q.x1, q.yb1)),
-            orient2d(a, b, DVec2::new(q.x0, q.yt0)),
-            orient2d(a, b, DVec2::new(q.x1, q.yt1)),
-        ];
-        s.iter().all(|o| *o == Orientation::Left) || s.iter().all(|o| *o == Orientation::Right)
-    })
+    p.pieces.iter().all(|q| ray_misses_piece(a, b, q))
 }
 
 /// Whether the line `a b` passes through the interior of `r` (corners strictly on both

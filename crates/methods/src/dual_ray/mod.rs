@@ -20,8 +20,16 @@
 //!   (their outer prisms' boxes);
 //! * [`plane`] — reduction of a box-to-box test to a planar problem (§4): upper rims,
 //!   shaft, ceiling plane `T`, occluders cut by `T`, dual ray space `RS`;
-//! * [`discrete`] — §5.2 with exact union coverage per row (NOTES §2);
-//! * [`exact`] — §5.1 with exact predicates.
+//! * [`discrete`] — §5.2 with exact union coverage per row (NOTES §2), most rows decided
+//!   by bit-parallel `u128` rows, refined with per-band lists of the pieces that matter;
+//! * [`exact`] — §5.1 with exact predicates;
+//! * [`witness`] — a single ray verified clear (exact predicates) answers "visible"
+//!   without gathering the whole shaft; it changes no answer of either planar method.
+//!
+//! Order of one box-to-box test along an axis: the occluders near the cell are gathered
+//! first; a witness ray from their gaps, checked along its own line to the far box,
+//! settles "visible"; else their coverage may already settle "hidden"; only then is the
+//! whole shaft gathered and tested.
 //!
 //! Degenerate configurations: boxes overlapping in both x and y (the cell inside a
 //! node, an object straddling the cell) have no separating planes and count as visible;
@@ -52,6 +60,7 @@ pub mod kdtree;
 pub mod occluders;
 pub mod plane;
 mod table1;
+pub(crate) mod witness;
 
 pub use table1::{occluded_area_m2, table1, Table1Row};
 
@@ -91,6 +100,14 @@ pub struct TraversalStats {
     pub trivial_tests: u64,
     /// Occluder pieces gathered over all planar problems.
     pub pieces: u64,
+    /// Axis tests hidden by the near occluders alone.
+    pub near_hidden: u64,
+    /// Axis tests hidden only by the full shaft.
+    pub full_hidden: u64,
+    /// Axis tests found visible.
+    pub visible: u64,
+    /// Of which settled by a witness ray (without gathering the whole shaft).
+    pub witnessed: u64,
 }
 
 /// The dual ray space method prepared for one scene.
@@ -282,7 +299,8 @@ impl DualRay {
                 continue;
             }
             let (ra, rb) = (local_rect(a, axis), local_rect(b, axis));
-            let (lo, lo_top, hi, hi_top) = if ra.x1 < rb.x0 {
+            let cell_low = ra.x1 < rb.x0;
+            let (lo, lo_top, hi, hi_top) = if cell_low {
                 (ra, a.max.z, rb, b.max.z)
             } else {
                 (rb, b.max.z, ra, a.max.z)
@@ -296,19 +314,34 @@ impl DualRay {
             let len = hi.x0 - lo.x1;
             let near = (len * 0.25).max(NEAR_M);
             if near < len {
-                let signed = if ra.x1 < rb.x0 { near } else { -near };
-                Planar::build(scratch, decomp, lo, lo_top, hi, hi_top, Some(signed));
+                let signed = if cell_low { near } else { -near };
+                Planar::build(
+                    scratch,
+                    decomp,
+                    lo,
+                    lo_top,
+                    hi,
+                    hi_top,
+                    Some(signed),
+                    cell_low,
+                );
                 stats.planar_tests += 1;
                 stats.pieces += scratch.planar.pieces.len() as u64;
+                if witness::visible(scratch, decomp) {
+                    stats.visible += 1;
+                    stats.witnessed += 1;
+                    continue;
+                }
                 let res = match self.planarity {
                     Planarity::Discrete { resolution_px } => resolution_px,
                     Planarity::Exact => discrete::FIRST_LEVEL * 16,
                 };
                 if discrete::hidden(scratch, res) {
+                    stats.near_hidden += 1;
                     return true;
                 }
             }
-            Planar::build(scratch, decomp, lo, lo_top, hi, hi_top, None);
+            Planar::build(scratch, decomp, lo, lo_top, hi, hi_top, None, cell_low);
             stats.planar_tests += 1;
             stats.pieces += scratch.planar.pieces.len() as u64;
             let hidden = match self.planarity {
@@ -316,8 +349,10 @@ impl DualRay {
                 Planarity::Exact => exact::hidden(scratch),
             };
             if hidden {
+                stats.full_hidden += 1;
                 return true;
             }
+            stats.visible += 1;
         }
         false
     }

@@ -32,7 +32,7 @@
 //! coverage of [`super::discrete`] exact per row, without cracks.
 
 use super::occluders::{Axis, Decomposition, Slab, Trap};
-use sightline_geom::Aabb3;
+use sightline_geom::{orient2d, Aabb3, DVec2, Orientation};
 
 /// Kept pieces of the ceiling cut are shrunk by this much along `x` (metres): rounding
 /// in `x*(h)` must never make an occluder larger than it is.
@@ -48,7 +48,7 @@ pub(crate) struct Rect {
 }
 
 /// The ceiling plane `T`: height `z0 + slope * (x - x_anchor)`.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Ceiling {
     pub x_anchor: f64,
     pub z0: f64,
@@ -205,8 +205,22 @@ pub(crate) struct Planar {
     pub w_hi: f64,
     pub pieces: Vec<Piece>,
     pub duals: Vec<DualPiece>,
+    /// Per piece, the lines `g = alpha - beta·w` of its two bottom and two top vertices
+    /// (`[ab0, bb0, ab1, bb1, at0, bt0, at1, bt1]`): the branch-free form of
+    /// [`Planar::piece_band`]; NaN for the pieces with a vertex on `F_B`.
+    pub lines: Vec<[f64; 8]>,
+    /// Indices of the pieces with a vertex on `F_B`, answered by `piece_band`.
+    pub on_fb: Vec<u32>,
     /// Coverage tolerance in `u` (metres): coverage must overlap by this much.
     pub eps: f64,
+    /// The shaft in scene-local coordinates: faces at `xa < xb`, centre line `yc`,
+    /// ceiling `T`, and the part `[ga, gb]` of `[xa, xb]` whose occluders were gathered.
+    pub xa: f64,
+    pub xb: f64,
+    pub yc: f64,
+    pub ceiling: Ceiling,
+    pub ga: f64,
+    pub gb: f64,
 }
 
 impl Default for Rect {
@@ -230,6 +244,13 @@ pub(crate) struct Scratch {
     pub kept: Vec<(f64, f64)>,
     pub intervals: Vec<(f64, f64)>,
     pub bands: Vec<(f64, f64, u32)>,
+    /// Refinement of [`super::discrete::hidden`]: bands and their piece lists.
+    pub refine: Vec<super::discrete::Band>,
+    pub lists: Vec<u32>,
+    /// Pieces of the ungathered part of a shaft, met by a candidate ray.
+    pub far: Vec<Piece>,
+    /// Candidate rays `(gap width, u, w)`.
+    pub candidates: Vec<(f64, f64, f64)>,
 }
 
 /// The rectangle of a box in `axis`-local coordinates, translated by `-origin`.
@@ -248,7 +269,8 @@ pub(crate) fn local_rect(b: &Aabb3, axis: Axis) -> Rect {
 
 impl Planar {
     /// Set up the shaft between `lo` (tops at `lo_top`) and `hi` (`lo.x1 < hi.x0`) and
-    /// gather the occluder pieces cut by the ceiling from `decomp`.
+    /// gather the occluder pieces cut by the ceiling from `decomp`, ordered from the
+    /// cell's side (`lo` when `cell_low`) outwards.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn build(
         scratch: &mut Scratch,
@@ -258,6 +280,7 @@ impl Planar {
         hi: Rect,
         hi_top: f64,
         near: Option<f64>,
+        cell_low: bool,
     ) {
         let ceiling = Ceiling::new(&lo, lo_top, &hi, hi_top);
         let xa = lo.x1;
@@ -277,6 +300,7 @@ impl Planar {
             y0: r.y0 - yc,
             y1: r.y1 - yc,
         };
+        let gen = next_stamp(scratch, decomp);
         let p = &mut scratch.planar;
         p.len = xb - xa;
         p.lo = to_local(&lo);
@@ -289,19 +313,17 @@ impl Planar {
         p.eps = 1e-9 * (1.0 + (u_hi - u_lo).max(w_hi - w_lo).max(p.len));
         p.pieces.clear();
         p.duals.clear();
+        p.lines.clear();
+        p.on_fb.clear();
+        p.xa = xa;
+        p.xb = xb;
+        p.yc = yc;
+        p.ceiling = ceiling;
+        p.ga = ga;
+        p.gb = gb;
 
         // Walk the grid columns between the faces, rows within the shaft's hull.
         let g = &decomp.grid;
-        if scratch.stamp.len() != decomp.slabs.len() {
-            scratch.stamp = vec![0; decomp.slabs.len()];
-            scratch.stamp_gen = 0;
-        }
-        scratch.stamp_gen = scratch.stamp_gen.wrapping_add(1);
-        if scratch.stamp_gen == 0 {
-            scratch.stamp.iter_mut().for_each(|s| *s = 0);
-            scratch.stamp_gen = 1;
-        }
-        let gen = scratch.stamp_gen;
         let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
         let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
         let (c0, c1) = (g.col(ga), g.col(gb));
@@ -336,11 +358,102 @@ impl Planar {
                 }
             }
         }
+        // Nearest the cell first: the coverage rows of `discrete` fill up early.
+        if !cell_low {
+            p.pieces.reverse();
+        }
         let len = p.len;
         p.duals.extend(p.pieces.iter().map(|q| DualPiece {
             b: [Dual::new(q.x0, q.yb0, len), Dual::new(q.x1, q.yb1, len)],
             t: [Dual::new(q.x0, q.yt0, len), Dual::new(q.x1, q.yt1, len)],
         }));
+        for (i, d) in p.duals.iter().enumerate() {
+            let [b0, b1] = d.b;
+            let [t0, t1] = d.t;
+            if b0.on_fb || b1.on_fb || t0.on_fb || t1.on_fb {
+                p.on_fb.push(i as u32);
+                p.lines.push([f64::NAN; 8]);
+            } else {
+                p.lines.push([
+                    b0.alpha, b0.beta, b1.alpha, b1.beta, t0.alpha, t0.beta, t1.alpha, t1.beta,
+                ]);
+            }
+        }
+    }
+
+    /// Whether the ray `(u, w)` misses every occluder piece of the part of the shaft
+    /// outside `[ga, gb]` (the pieces `build` did not gather), decided exactly: the
+    /// grid buckets along the ray's line are cut by the same ceiling and each piece met
+    /// is tested with `orient2d`. Stops at the first piece that blocks the ray.
+    pub(crate) fn far_ray_clear(
+        scratch: &mut Scratch,
+        decomp: &Decomposition,
+        u: f64,
+        w: f64,
+    ) -> bool {
+        let gen = next_stamp(scratch, decomp);
+        let p = &scratch.planar;
+        let (xa, xb, yc, len) = (p.xa, p.xb, p.yc, p.len);
+        let (u_lo, u_hi, w_lo, w_hi) = (p.u_lo, p.u_hi, p.w_lo, p.w_hi);
+        let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
+        let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
+        let ray_y = |x: f64| yc + u + (w - u) * ((x - xa) / len);
+        let (a, b) = (DVec2::new(0.0, u), DVec2::new(len, w));
+        let g = &decomp.grid;
+        // Rounding of the ray's height must not skip a bucket row.
+        let margin = 1e-6 * (1.0 + yc.abs() + u.abs() + w.abs());
+        for (f0, f1) in [(xa, p.ga), (p.gb, xb)] {
+            if f1 <= f0 {
+                continue;
+            }
+            for c in g.col(f0)..=g.col(f1) {
+                let cx0 = (g.origin.x + c as f64 * g.cell_m).max(f0);
+                let cx1 = (g.origin.x + (c + 1) as f64 * g.cell_m).min(f1);
+                let (y0, y1) = (ray_y(cx0), ray_y(cx1));
+                let (r0, r1) = (g.row(y0.min(y1) - margin), g.row(y0.max(y1) + margin));
+                for r in r0..=r1 {
+                    for &id in g.bucket(c, r) {
+                        let st = &mut scratch.stamp[id as usize];
+                        if *st == gen {
+                            continue;
+                        }
+                        *st = gen;
+                        let slab = &decomp.slabs[id as usize];
+                        let traps =
+                            &decomp.traps[slab.first as usize..(slab.first + slab.len) as usize];
+                        scratch.far.clear();
+                        cut_slab(
+                            slab,
+                            traps,
+                            &p.ceiling,
+                            (xa, f0, f1),
+                            yc,
+                            &lower,
+                            &upper,
+                            &mut scratch.cuts,
+                            &mut scratch.kept,
+                            &mut scratch.far,
+                        );
+                        if !scratch.far.iter().all(|q| ray_misses_piece(a, b, q)) {
+                            return false;
+                        }
+                    }
+                }
+            }
+        }
+        true
+    }
+
+    /// [`Planar::piece_band`] through the branch-free lines where they exist.
+    #[inline]
+    pub(crate) fn piece_band_fast(&self, i: usize, w0: f64, w1: f64) -> (f64, f64) {
+        let l = &self.lines[i];
+        if l[0].is_nan() {
+            return self.piece_band(i, w0, w1);
+        }
+        let lo = (l[0] - l[1] * w0).min(l[2] - l[3] * w0);
+        let hi = (l[4] - l[5] * w1).max(l[6] - l[7] * w1);
+        (lo, hi)
     }
 
     /// The rays `u` blocked by piece `i` for every `w` of the band `[w0, w1]`:
@@ -380,6 +493,34 @@ impl Planar {
             }
         }
     }
+}
+
+/// A fresh generation of the per-slab stamps (each slab is cut once per walk). The
+/// stamps are shared by both axes' decompositions: only growing them clears them.
+fn next_stamp(scratch: &mut Scratch, decomp: &Decomposition) -> u32 {
+    if scratch.stamp.len() < decomp.slabs.len() {
+        scratch.stamp = vec![0; decomp.slabs.len()];
+        scratch.stamp_gen = 0;
+    }
+    scratch.stamp_gen = scratch.stamp_gen.wrapping_add(1);
+    if scratch.stamp_gen == 0 {
+        scratch.stamp.iter_mut().for_each(|s| *s = 0);
+        scratch.stamp_gen = 1;
+    }
+    scratch.stamp_gen
+}
+
+/// Whether the line `a b` leaves every vertex of the convex piece `q` strictly on one
+/// side (exact predicates).
+#[inline]
+pub(crate) fn ray_misses_piece(a: DVec2, b: DVec2, q: &Piece) -> bool {
+    let s = [
+        orient2d(a, b, DVec2::new(q.x0, q.yb0)),
+        orient2d(a, b, DVec2::new(q.x1, q.yb1)),
+        orient2d(a, b, DVec2::new(q.x0, q.yt0)),
+        orient2d(a, b, DVec2::new(q.x1, q.yt1)),
+    ];
+    s.iter().all(|o| *o == Orientation::Left) || s.iter().all(|o| *o == Orientation::Right)
 }
 
 /// The shaft's cross-sections at `x = 0` (`u`) and `x = len` (`w`): the convex hull of

@@ -1,0 +1,182 @@
+//! Visibility witnesses: a single clear ray settles a box-to-box test as "visible"
+//! without gathering the whole shaft.
+//!
+//! Most tests of a street cell in a large city are *visible* (the kd-nodes and objects
+//! along the streets it opens onto), and a visible answer of [`super::discrete`] is the
+//! most expensive one: every occluder of a shaft kilometres long is gathered, and
+//! refinement runs down to the finest rows. A ray `(u, w)` of `RS` that passes strictly
+//! through both boxes and strictly misses every occluder piece (exact `orient2d`) makes
+//! the same answer certain at every resolution: for each band `[w0, w1] ∋ w` the pieces
+//! block at most `[H(w0), G(w1)] ⊆ [H(w), G(w)]`, which leaves `u` free, so no band
+//! containing `w` is ever covered (§5.2). The exact algorithm answers "visible" for it
+//! too (§5.1). So the witness changes no PVS, only the time to reach it.
+//!
+//! Candidates come from the occluders near the cell (gathered first anyway): the gaps of
+//! their blocked intervals at a few `w`, widest first. Each is verified against the near
+//! pieces and then against the rest of the shaft along its own line only
+//! ([`Planar::far_ray_clear`]), stopping at the first piece that blocks it.
+
+use super::discrete::{touch_interval, touch_row, COLUMNS};
+use super::exact::ray_is_clear;
+use super::occluders::Decomposition;
+use super::plane::{Planar, Scratch};
+
+/// Rows of `RS` sampled for candidate gaps.
+const SAMPLES: u32 = 8;
+
+/// Candidates verified per test, widest gap first (more tries cost more than the full
+/// tests they save on the metropolis).
+const TRIES: usize = 1;
+
+/// `true` when a verified clear ray joins the two boxes of the planar problem in
+/// `scratch`, whose pieces are those of `[ga, gb]` only.
+pub(crate) fn visible(scratch: &mut Scratch, decomp: &Decomposition) -> bool {
+    gather_candidates(scratch);
+    let mut tried = 0;
+    while tried < TRIES {
+        let Some((_, u, w)) = scratch.candidates.pop() else {
+            return false;
+        };
+        tried += 1;
+        if ray_is_clear(&scratch.planar, u, w) && Planar::far_ray_clear(scratch, decomp, u, w) {
+            return true;
+        }
+    }
+    false
+}
+
+/// The middles of the runs of columns left clear by the gathered pieces and the box
+/// masks at `SAMPLES` rows (the bit-parallel rows of [`super::discrete`]), sorted by
+/// increasing width (the widest is popped first).
+fn gather_candidates(scratch: &mut Scratch) {
+    let p = &scratch.planar;
+    let cands = &mut scratch.candidates;
+    cands.clear();
+    let (w_lo, w_hi) = (p.w_lo, p.w_hi);
+    let span = p.u_hi - p.u_lo;
+    let m = 3.0 * p.eps;
+    if !(w_lo < w_hi) || !(span > 64.0 * m) {
+        return;
+    }
+    let col = span / COLUMNS as f64;
+    let iv = &mut scratch.intervals;
+    for k in 0..SAMPLES {
+        let w = w_lo + (w_hi - w_lo) * ((k as f64 + 0.5) / SAMPLES as f64);
+        iv.clear();
+        p.mask_band(w, w, iv);
+        let mut touch = touch_row(iv, p.u_lo, span, m);
+        for i in 0..p.duals.len() {
+            let (lo, hi) = p.piece_band_fast(i, w, w);
+            if hi >= lo {
+                touch |= touch_interval(lo, hi, p.u_lo, span, m);
+            }
+        }
+        let mut free = !touch;
+        let mut j = 0u32;
+        while free != 0 {
+            let skip = free.trailing_zeros();
+            free >>= skip;
+            j += skip;
+            let run = (!free).trailing_zeros();
+            let u = p.u_lo + col * (j as f64 + 0.5 * run as f64);
+            cands.push((run as f64, u, w));
+            free = if run >= 128 { 0 } else { free >> run };
+            j += run;
+        }
+    }
+    cands.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::occluders::Axis;
+    use super::super::plane::{local_rect, Planar, Scratch};
+    use super::super::{discrete, exact, DualRay, Planarity};
+    use super::*;
+    use sightline_geom::{Aabb3, DVec3};
+    use sightline_scene::generate::{city, metropolis};
+    use std::sync::Arc;
+
+    /// Whenever a witness is found from the near pieces, the full shaft is not hidden
+    /// for the discretized method at any resolution nor for the exact one: the witness
+    /// changes no answer.
+    fn witness_never_contradicts(scene: sightline_scene::Scene, cells: &[[f64; 6]]) {
+        let m = DualRay::new("dual-ray", Arc::new(scene), Planarity::Exact);
+        let o3 = m.origin.extend(0.0);
+        let mut scratch = Scratch::default();
+        let (mut witnessed, mut tried) = (0, 0);
+        for c in cells {
+            let a = Aabb3::new(
+                DVec3::new(c[0], c[1], c[2]) - o3,
+                DVec3::new(c[3], c[4], c[5]) - o3,
+            );
+            for (_, b) in m.tree.items.iter().step_by(3) {
+                for axis in [Axis::X, Axis::Y] {
+                    let (ra, rb) = (local_rect(&a, axis), local_rect(b, axis));
+                    let cell_low = ra.x1 < rb.x0;
+                    if !cell_low && rb.x1 >= ra.x0 {
+                        continue; // not separated along this axis
+                    }
+                    let (lo, lo_top, hi, hi_top) = if cell_low {
+                        (ra, a.max.z, rb, b.max.z)
+                    } else {
+                        (rb, b.max.z, ra, a.max.z)
+                    };
+                    let decomp = match axis {
+                        Axis::X => &m.decomp_x,
+                        Axis::Y => &m.decomp_y,
+                    };
+                    let len = hi.x0 - lo.x1;
+                    let near = if cell_low { 0.3 * len } else { -0.3 * len };
+                    Planar::build(
+                        &mut scratch,
+                        decomp,
+                        lo,
+                        lo_top,
+                        hi,
+                        hi_top,
+                        Some(near),
+                        cell_low,
+                    );
+                    tried += 1;
+                    if !visible(&mut scratch, decomp) {
+                        continue;
+                    }
+                    witnessed += 1;
+                    Planar::build(&mut scratch, decomp, lo, lo_top, hi, hi_top, None, cell_low);
+                    for res in [16, 128] {
+                        assert!(!discrete::hidden(&mut scratch, res), "{c:?} {b:?} {res}");
+                    }
+                    assert!(!exact::hidden(&mut scratch), "{c:?} {b:?} exact");
+                }
+            }
+        }
+        assert!(
+            witnessed > 10 && witnessed < tried,
+            "{witnessed} of {tried}"
+        );
+    }
+
+    #[test]
+    fn witnesses_agree_with_full_tests_in_a_city() {
+        witness_never_contradicts(
+            city(7, 300),
+            &[
+                [0.0, 0.0, 1.5, 20.0, 20.0, 2.0],
+                [150.0, -80.0, 0.0, 250.0, 20.0, 2.0],
+            ],
+        );
+    }
+
+    #[test]
+    fn witnesses_agree_with_full_tests_in_a_grid_metropolis() {
+        // Street crossings of the 110 m grid: long, grazing sight lines.
+        witness_never_contradicts(
+            metropolis(3, 600),
+            &[
+                [210.0, 210.0, 0.0, 230.0, 230.0, 2.0],
+                [300.0, 400.0, 0.0, 360.0, 460.0, 2.0],
+            ],
+        );
+    }
+}
