@@ -27,7 +27,7 @@ use sightline_scene::Scene;
 /// Pixel size of the height field for ordinary scenes (m).
 pub const PIXEL_M: f64 = 0.5;
 /// The pixel grows for huge scenes so that one field holds at most this many pixels.
-pub const MAX_PIXELS: f64 = 48.0e6;
+pub const MAX_PIXELS: f64 = 16.0e6;
 /// Heights are stored in decimetres.
 pub const DM: f64 = 0.1;
 /// Fill thresholds are rounded up to multiples of this (decimetres).

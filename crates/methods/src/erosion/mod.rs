@@ -57,7 +57,7 @@ pub const MAX_DEPTH: usize = 3;
 /// Sub-cells are not made smaller than this (m).
 pub const MIN_SUBCELL_M: f64 = 2.0;
 /// Memory bound of the cache of eroded occluder rasters (bytes).
-const CACHE_BYTES: usize = 1 << 30;
+const CACHE_BYTES: usize = 3 << 29;
 
 /// Default number of azimuth bins of the occlusion map.
 pub const DEFAULT_BINS: u32 = 2048;
