@@ -4,10 +4,12 @@
 //! "aggressive" visibility): stratified viewpoints in the cell's free space each render
 //! the full sphere of directions (six cube faces) into object-id buffers with the
 //! standard coverage rule, and the ids seen are united. *Targeted* rays then look for
-//! every object still unseen: segments from the viewpoints to random points of the
-//! object's surface, tested exactly against every other object (a ray caster of its own,
-//! independent of the rasterizer), so that objects seen only through gaps narrower than
-//! a pixel are found too. Every id reported comes with a [`Witness`]: the viewpoint and
+//! every object still unseen: segments from the viewpoints (and from fresh random points
+//! of the cell's free space) to random points of the object's front faces (their area,
+//! their highest edge: a roof line seen over other roofs, and their boundary), tested
+//! exactly against every other object (a ray caster of its own, independent of the
+//! rasterizer), so that objects seen only through gaps or as slivers narrower than a
+//! pixel are found too. Every id reported comes with a [`Witness`]: the viewpoint and
 //! the direction of a sample that saw it.
 //!
 //! The VS is a *lower bound* of the true visible set: an object in the VS is visible,
