@@ -4,10 +4,12 @@
 //! "aggressive" visibility): stratified viewpoints in the cell's free space each render
 //! the full sphere of directions (six cube faces) into object-id buffers with the
 //! standard coverage rule, and the ids seen are united. *Targeted* rays then look for
-//! every object still unseen: segments from the viewpoints to random points of the
-//! object's surface, tested exactly against every other object (a ray caster of its own,
-//! independent of the rasterizer), so that objects seen only through gaps narrower than
-//! a pixel are found too. Every id reported comes with a [`Witness`]: the viewpoint and
+//! every object still unseen: segments from the viewpoints (and from fresh random points
+//! of the cell's free space) to random points of the object's front faces (their area,
+//! their highest edge: a roof line seen over other roofs, and their boundary), tested
+//! exactly against every other object (a ray caster of its own, independent of the
+//! rasterizer), so that objects seen only through gaps or as slivers narrower than a
+//! pixel are found too. Every id reported comes with a [`Witness`]: the viewpoint and
 //! the direction of a sample that saw it.
 //!
 //! The VS is a *lower bound* of the true visible set: an object in the VS is visible,
@@ -69,9 +71,9 @@ pub struct TruthOptions {
 impl Default for TruthOptions {
     fn default() -> Self {
         TruthOptions {
-            samples: 64,
-            resolution_px: 512,
-            targeted_rays_per_object: 64,
+            samples: 128,
+            resolution_px: 1024,
+            targeted_rays_per_object: 256,
             seed: 1,
         }
     }
@@ -374,14 +376,7 @@ impl TruthScene {
 
     /// Stratified viewpoints of `cell` in its free space.
     pub fn viewpoints(&self, cell: &ViewCell, opts: &TruthOptions) -> Vec<DVec3> {
-        let mut lo = cell.min;
-        let mut hi = cell.max;
-        for a in 0..3 {
-            if hi[a] - lo[a] > 2.0 * INSET_M {
-                lo[a] += INSET_M;
-                hi[a] -= INSET_M;
-            }
-        }
+        let (lo, hi) = inset_box(cell);
         let mut rng = SplitMix(opts.seed ^ cell_hash(cell));
         let pts = stratified(lo, hi, opts.samples.max(1) as usize, &mut rng);
         pts.into_iter()
@@ -395,42 +390,67 @@ impl TruthScene {
         let vps = self.viewpoints(cell, opts);
         let res = opts.resolution_px.max(8);
         // Rendering: union of ids over viewpoints × faces, first witness kept.
-        let seen: Vec<Option<Witness>> = vps
+        let seen: Vec<(Option<Witness>, bool)> = vps
             .par_iter()
-            .map(|&eye| {
-                let mut seen: Vec<Option<Witness>> = vec![None; self.objects];
-                let mut fb = Framebuffer::new(res, res);
-                for face in Face::ALL {
-                    let view = View::cube_face(eye, face, res, NEAR_M);
-                    fb.clear();
-                    self.render(&view, &mut fb);
-                    for j in 0..res {
-                        for i in 0..res {
-                            let id = fb.id_at(i, j);
-                            if id != NO_ID && seen[id as usize].is_none() {
+            // One framebuffer per rayon job, reused over its viewpoints (no 8 MB
+            // allocation and page faults per viewpoint).
+            .map_init(
+                || Framebuffer::new(res, res),
+                |fb, &eye| {
+                    // Per object: its witness, and whether it is a strong one.
+                    let mut seen: Vec<(Option<Witness>, bool)> = vec![(None, false); self.objects];
+                    let bins = self.bin_faces(eye);
+                    for (face, bin) in Face::ALL.into_iter().zip(&bins) {
+                        let view = View::cube_face(eye, face, res, NEAR_M);
+                        fb.clear();
+                        self.render(&view, bin, fb);
+                        let ids = &fb.ids;
+                        let w = res as usize;
+                        for (k, &id) in ids.iter().enumerate() {
+                            if id == NO_ID || seen[id as usize].1 {
+                                continue;
+                            }
+                            // The witness pixel: preferably one whose four neighbours
+                            // show the same object (a strong witness: its ray meets the
+                            // object well inside its silhouette, not at a grazing
+                            // edge); else the first one.
+                            let (i, j) = (k % w, k / w);
+                            let interior = i > 0
+                                && i + 1 < w
+                                && j > 0
+                                && j + 1 < w
+                                && ids[k - 1] == id
+                                && ids[k + 1] == id
+                                && ids[k - w] == id
+                                && ids[k + w] == id;
+                            if interior || seen[id as usize].0.is_none() {
                                 let d = view.direction(i as f64 + 0.5, j as f64 + 0.5);
-                                seen[id as usize] = Some(Witness {
-                                    id,
-                                    viewpoint: eye.to_array(),
-                                    direction: d.to_array(),
-                                });
+                                seen[id as usize] = (
+                                    Some(Witness {
+                                        id,
+                                        viewpoint: eye.to_array(),
+                                        direction: d.to_array(),
+                                    }),
+                                    interior,
+                                );
                             }
                         }
                     }
-                }
-                seen
-            })
+                    seen
+                },
+            )
             .reduce(
-                || vec![None; self.objects],
+                || vec![(None, false); self.objects],
                 |mut a, b| {
                     for (x, y) in a.iter_mut().zip(b) {
-                        if x.is_none() {
+                        if x.0.is_none() || (!x.1 && y.1) {
                             *x = y;
                         }
                     }
                     a
                 },
             );
+        let seen: Vec<Option<Witness>> = seen.into_iter().map(|(w, _)| w).collect();
         // Targeted rays for the objects still unseen.
         let rendered = seen.iter().filter(|s| s.is_some()).count();
         let mut seen = seen;
@@ -456,28 +476,55 @@ impl TruthScene {
         }
     }
 
-    /// Draw every face (back faces of solids culled) into `fb` with the standard rule.
-    fn render(&self, view: &View, fb: &mut Framebuffer) {
-        let eye = view.eye;
-        for f in &self.faces {
+    /// The faces each cube face around `eye` may show, in [`Face::ALL`] order: back faces
+    /// of solids culled, and faces whose vertices all lie outside one plane of a cube
+    /// face's frustum (the near plane or a side) left out of that face's list. One pass
+    /// over the scene per viewpoint instead of one per cube face.
+    fn bin_faces(&self, eye: DVec3) -> [Vec<u32>; 6] {
+        let mut bins: [Vec<u32>; 6] = Default::default();
+        // Per cube face: (forward axis, sign, the two other axes). A cube face's camera
+        // coordinates are ±components of `v - eye`, so these tests are the ones of
+        // `View::to_camera` exactly.
+        let frames: [(usize, f64, usize, usize); 6] = Face::ALL.map(|f| {
+            let (fw, _) = f.axes();
+            let a = (0..3).find(|&k| fw[k] != 0.0).unwrap_or(0);
+            (a, fw[a], (a + 1) % 3, (a + 2) % 3)
+        });
+        for (k, f) in self.faces.iter().enumerate() {
             if let Some(n) = f.normal {
                 if n.dot(eye - f.verts[0]) <= 0.0 {
                     continue;
                 }
             }
-            // Frustum rejection: all vertices outside one of the five planes.
-            let mut out = [true; 5];
+            // Bit 5 c + p: every vertex lies outside plane p of cube face c.
+            let mut out = u32::MAX;
             for v in &f.verts {
-                let c = view.to_camera(*v);
-                out[0] &= c.z < view.near;
-                out[1] &= c.x > c.z;
-                out[2] &= c.x < -c.z;
-                out[3] &= c.y > c.z;
-                out[4] &= c.y < -c.z;
+                let d = *v - eye;
+                let mut m = 0u32;
+                for (c, &(a, s, b, e)) in frames.iter().enumerate() {
+                    let z = s * d[a];
+                    let bits = (z < NEAR_M) as u32
+                        | ((d[b] > z) as u32) << 1
+                        | ((d[b] < -z) as u32) << 2
+                        | ((d[e] > z) as u32) << 3
+                        | ((d[e] < -z) as u32) << 4;
+                    m |= bits << (5 * c);
+                }
+                out &= m;
             }
-            if out.iter().any(|&o| o) {
-                continue;
+            for (c, bin) in bins.iter_mut().enumerate() {
+                if (out >> (5 * c)) & 0x1f == 0 {
+                    bin.push(k as u32);
+                }
             }
+        }
+        bins
+    }
+
+    /// Draw the faces of `list` into `fb` with the standard rule.
+    fn render(&self, view: &View, list: &[u32], fb: &mut Framebuffer) {
+        for &k in list {
+            let f = &self.faces[k as usize];
             fb.draw_polygon(view, &f.verts, f.id, Coverage::Standard);
         }
     }
@@ -494,27 +541,53 @@ impl TruthScene {
         if faces.is_empty() {
             return None;
         }
-        let total: f64 = faces.iter().map(|&f| self.faces[f as usize].area).sum();
         let mut rng =
             SplitMix(opts.seed ^ cell_hash(cell) ^ (id as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+        let (lo, hi) = inset_box(cell);
         for r in 0..opts.targeted_rays_per_object as usize {
-            let vp = vps[(r + id as usize) % vps.len()];
-            // Area-weighted face, uniform point on it.
+            // Odd rays start at the rendered viewpoints, even ones at fresh uniform points
+            // of the cell's free space (what is seen only from a small part of the cell
+            // is found without more renderings; the rays do not depend on `samples`).
+            let fresh = lo + (hi - lo) * DVec3::new(rng.next(), rng.next(), rng.next());
+            let vp =
+                if r % 2 == 0 && fresh.z > INSET_M / 2.0 && !self.in_block(fresh, INSET_M / 2.0) {
+                    fresh
+                } else {
+                    vps[(r + id as usize) % vps.len()]
+                };
+            // An area-weighted face among those facing the viewpoint.
+            let front = |f: &RFace| f.normal.is_none_or(|n| n.dot(vp - f.verts[0]) > 0.0);
+            let total: f64 = faces
+                .iter()
+                .map(|&f| &self.faces[f as usize])
+                .filter(|f| front(f))
+                .map(|f| f.area)
+                .sum();
+            if !(total > 0.0) {
+                continue;
+            }
             let mut pick = rng.next() * total;
             let mut face = &self.faces[faces[0] as usize];
             for &f in faces {
-                face = &self.faces[f as usize];
+                let cand = &self.faces[f as usize];
+                if !front(cand) {
+                    continue;
+                }
+                face = cand;
                 pick -= face.area;
                 if pick <= 0.0 {
                     break;
                 }
             }
-            if let Some(n) = face.normal {
-                if n.dot(vp - face.verts[0]) <= 0.0 {
-                    continue;
-                }
-            }
-            let target = random_point(&face.verts, &mut rng);
+            // What is seen of a far object over the roofs or through a gap is mostly a
+            // sliver along an edge, which area sampling rarely hits: a third of the rays
+            // aim at the face's highest edge (a roof line seen from the street), a third
+            // at any point of its boundary (corners, gaps), a third at its area.
+            let target = match r % 3 {
+                0 => random_point(&face.verts, &mut rng),
+                1 => nudge_inward(random_top_edge_point(&face.verts, &mut rng), &face.verts),
+                _ => nudge_inward(random_edge_point(&face.verts, &mut rng), &face.verts),
+            };
             if target.z < 0.0 {
                 continue;
             }
@@ -548,6 +621,20 @@ impl TruthScene {
             false
         })
     }
+}
+
+/// The box viewpoints are taken from: the cell shrunk by [`INSET_M`] (per axis, when
+/// it is wider than twice that).
+fn inset_box(cell: &ViewCell) -> (DVec3, DVec3) {
+    let mut lo = cell.min;
+    let mut hi = cell.max;
+    for a in 0..3 {
+        if hi[a] - lo[a] > 2.0 * INSET_M {
+            lo[a] += INSET_M;
+            hi[a] -= INSET_M;
+        }
+    }
+    (lo, hi)
 }
 
 /// Distance from `p` to the boundary of `poly`.
@@ -642,6 +729,52 @@ fn segment_triangle(a: DVec3, b: DVec3, t: &[DVec3; 3], eps: f64) -> bool {
     let tt = e2.dot(q) * inv;
     let slack = eps / e1.length().max(e2.length()).max(1e-12);
     u >= -slack && v >= -slack && u + v <= 1.0 + slack && (0.0..=1.0).contains(&tt)
+}
+
+/// `p` (on the boundary of the planar polygon `v`) moved 1 mm (at most a thousandth of
+/// its distance) towards the centroid, into the face: the witness ray then meets the
+/// face inside, not at its edge.
+fn nudge_inward(p: DVec3, v: &[DVec3]) -> DVec3 {
+    let c = v.iter().copied().sum::<DVec3>() / v.len().max(1) as f64;
+    let d = c - p;
+    let len = d.length();
+    if len > 0.0 {
+        p + d * (1e-3f64.min(1e-3 * len) / len)
+    } else {
+        p
+    }
+}
+
+/// A uniform point on the highest edge of the polygon `v` (largest mean height of its
+/// ends; the top edge of a wall).
+fn random_top_edge_point(v: &[DVec3], rng: &mut SplitMix) -> DVec3 {
+    let n = v.len();
+    let k = (0..n)
+        .max_by(|&a, &b| {
+            let za = v[a].z + v[(a + 1) % n].z;
+            let zb = v[b].z + v[(b + 1) % n].z;
+            za.total_cmp(&zb)
+        })
+        .unwrap_or(0);
+    let (a, b) = (v[k], v[(k + 1) % n]);
+    a + (b - a) * rng.next()
+}
+
+/// A uniform point on the boundary of the polygon `v` (length-weighted edge).
+fn random_edge_point(v: &[DVec3], rng: &mut SplitMix) -> DVec3 {
+    let n = v.len();
+    let total: f64 = (0..n).map(|k| (v[(k + 1) % n] - v[k]).length()).sum();
+    let mut pick = rng.next() * total;
+    let t = rng.next();
+    for k in 0..n {
+        let (a, b) = (v[k], v[(k + 1) % n]);
+        let len = (b - a).length();
+        if pick <= len || k + 1 == n {
+            return a + (b - a) * t;
+        }
+        pick -= len;
+    }
+    v[0]
 }
 
 fn random_point(v: &[DVec3], rng: &mut SplitMix) -> DVec3 {
@@ -921,10 +1054,11 @@ impl TruthScene {
     pub fn visible_from(&self, eye: DVec3, resolution_px: u32) -> Vec<u32> {
         let mut fb = Framebuffer::new(resolution_px, resolution_px);
         let mut ids: Vec<u32> = Vec::new();
-        for face in Face::ALL {
+        let bins = self.bin_faces(eye);
+        for (face, bin) in Face::ALL.into_iter().zip(&bins) {
             let view = View::cube_face(eye, face, resolution_px, NEAR_M);
             fb.clear();
-            self.render(&view, &mut fb);
+            self.render(&view, bin, &mut fb);
             ids.extend(fb.ids_seen());
         }
         ids.sort_unstable();

@@ -39,18 +39,21 @@ fn bench(c: &mut Criterion) {
     ] {
         let mut fb = Framebuffer::for_view(&view);
         fb.draw_polygon(&view, &tris[0], 0, cov);
+        // Pixels per triangle (each drawn alone) over a sample: pixels/s = triangles/s × this.
         let mut pixels = 0usize;
+        let probes = 500;
         {
             let mut probe = Framebuffer::for_view(&view);
-            for (k, t) in tris.iter().enumerate() {
+            for (k, t) in tris.iter().take(probes).enumerate() {
                 probe.clear();
                 probe.draw_triangle(&view, t, k as u32, cov);
-                if k < 200 {
-                    pixels += probe.ids.iter().filter(|&&i| i != u32::MAX).count();
-                }
+                pixels += probe.ids.iter().filter(|&&i| i != u32::MAX).count();
             }
         }
-        eprintln!("{name}: ~{} pixels per triangle", pixels as f64 / 200.0);
+        eprintln!(
+            "{name}: ~{:.1} pixels per triangle",
+            pixels as f64 / probes as f64
+        );
         g.bench_function(name, |b| {
             b.iter(|| {
                 fb.clear();

@@ -77,6 +77,22 @@ fn f32_up(v: f64) -> f32 {
     }
 }
 
+/// [`f32_up`] for `v > 0` (depths), branch-free: the next `f32` is one step of the
+/// bit pattern (`+∞` stays).
+#[inline(always)]
+fn f32_up_pos(v: f64) -> f32 {
+    let f = v as f32;
+    f32::from_bits(f.to_bits() + ((f as f64) < v) as u32)
+}
+
+/// [`f32_down`] for `v > 0`, branch-free (`f > v ≥ 0` implies `f > 0`, so the step
+/// down stays positive).
+#[inline(always)]
+fn f32_down_pos(v: f64) -> f32 {
+    let f = v as f32;
+    f32::from_bits(f.to_bits() - ((f as f64) > v) as u32)
+}
+
 #[inline]
 fn f32_down(v: f64) -> f32 {
     let f = v as f32;
@@ -217,54 +233,65 @@ impl Prepared {
         (l <= r).then_some((l, r))
     }
 
-    /// Farthest depth of the polygon within pixel `(i, j)` (upper bound).
-    #[inline]
-    pub fn far_depth(&self, i: u32, j: u32) -> f32 {
-        let w = match self.plane {
-            Some((a, b, c)) => {
-                let wc = a * (i as f64 + 0.5) + b * (j as f64 + 0.5) + c;
-                (wc - 0.5 * (a.abs() + b.abs())).max(self.wmin)
-            }
-            None => self.wmin,
-        };
-        f32_up(1.0 / w * (1.0 + 1e-12))
-    }
-
-    /// Nearest depth of the polygon within pixel `(i, j)` (lower bound).
-    #[inline]
-    pub fn near_depth(&self, i: u32, j: u32) -> f32 {
-        let w = match self.plane {
-            Some((a, b, c)) => {
-                let wc = a * (i as f64 + 0.5) + b * (j as f64 + 0.5) + c;
-                (wc + 0.5 * (a.abs() + b.abs())).min(self.wmax)
-            }
-            None => self.wmax,
-        };
-        f32_down(1.0 / w * (1.0 - 1e-12))
-    }
-
     /// Nearest depth over the whole polygon.
     pub fn min_depth(&self) -> f32 {
         f32_down(1.0 / self.wmax * (1.0 - 1e-12))
     }
 
-    /// Depth at the centre of pixel `(i, j)` (clamped to the polygon's depth range).
+    /// Depths of the pixels `(i0 + k, j)`, `k < out.len()`, of one row, into `out`.
+    ///
+    /// `w` at a pixel centre is `a x + b y + c` evaluated as `(a x + b y) + c`, with `b y`
+    /// computed once per row and `x = (i0 + 0.5) + k` (exact), so every value is bitwise
+    /// the one of the direct per-pixel formula. The loops are branch-free (they
+    /// vectorize).
+    /// * [`Depth::Centre`]: the depth at the centre (clamped to the vertex range).
+    /// * [`Depth::Far`]: an upper bound of the polygon's depth in the pixel.
+    /// * [`Depth::Near`]: a lower bound of it.
     #[inline]
-    fn centre_depth(&self, i: u32, j: u32) -> f32 {
-        let w = match self.plane {
+    pub fn row_depths(&self, kind: Depth, j: u32, i0: u32, out: &mut [f32]) {
+        let (wmin, wmax) = (self.wmin, self.wmax);
+        match self.plane {
             Some((a, b, c)) => {
-                (a * (i as f64 + 0.5) + b * (j as f64 + 0.5) + c).clamp(self.wmin, self.wmax)
+                let by = b * (j as f64 + 0.5);
+                let h = 0.5 * (a.abs() + b.abs());
+                let x0 = i0 as f64 + 0.5;
+                match kind {
+                    Depth::Centre => {
+                        for (k, o) in out.iter_mut().enumerate() {
+                            let x = x0 + k as u32 as f64;
+                            let w = (a * x + by + c).max(wmin).min(wmax);
+                            *o = (1.0 / w) as f32;
+                        }
+                    }
+                    Depth::Far => {
+                        for (k, o) in out.iter_mut().enumerate() {
+                            let x = x0 + k as u32 as f64;
+                            let w = (a * x + by + c - h).max(wmin);
+                            *o = f32_up_pos(1.0 / w * (1.0 + 1e-12));
+                        }
+                    }
+                    Depth::Near => {
+                        for (k, o) in out.iter_mut().enumerate() {
+                            let x = x0 + k as u32 as f64;
+                            let w = (a * x + by + c + h).min(wmax);
+                            *o = f32_down_pos(1.0 / w * (1.0 - 1e-12));
+                        }
+                    }
+                }
             }
-            None => self.wmax,
-        };
-        (1.0 / w) as f32
+            None => out.fill(match kind {
+                Depth::Centre => (1.0 / wmax) as f32,
+                Depth::Far => f32_up(1.0 / wmin * (1.0 + 1e-12)),
+                Depth::Near => f32_down(1.0 / wmax * (1.0 - 1e-12)),
+            }),
+        }
     }
 
     /// Rows `j0..=j1` of the screen the polygon may touch (empty if `j0 > j1`).
     #[inline]
     fn rows(&self, height: u32) -> (i64, i64) {
-        let j0 = ((self.ymin - EPS_PX).floor() as i64).max(0);
-        let j1 = ((self.ymax + EPS_PX).floor() as i64).min(height as i64 - 1);
+        let j0 = floor_i(self.ymin - EPS_PX).max(0);
+        let j1 = floor_i(self.ymax + EPS_PX).min(height as i64 - 1);
         (j0, j1)
     }
 
@@ -275,6 +302,62 @@ impl Prepared {
     }
 }
 
+/// `v.floor() as i64` without a libm call (the x86-64 baseline has no `roundsd`):
+/// exact for every `f64`, saturating like `as`.
+#[inline(always)]
+pub(crate) fn floor_i(v: f64) -> i64 {
+    let t = v as i64;
+    if (t as f64) > v {
+        t.saturating_sub(1)
+    } else {
+        t
+    }
+}
+
+/// `v.ceil() as i64`, see [`floor_i`].
+#[inline(always)]
+pub(crate) fn ceil_i(v: f64) -> i64 {
+    let t = v as i64;
+    if (t as f64) < v {
+        t.saturating_add(1)
+    } else {
+        t
+    }
+}
+
+/// Chunk of pixels whose depths are computed at once (stack buffer).
+pub(crate) const CHUNK: usize = 64;
+
+/// Call `f(k, depth)` for the `n` pixels `(i0 + k, j)` in chunks of [`CHUNK`].
+#[inline]
+pub(crate) fn for_row_depths(
+    p: &Prepared,
+    kind: Depth,
+    j: u32,
+    i0: u32,
+    n: usize,
+    mut f: impl FnMut(usize, f32),
+) {
+    let mut buf = [0f32; CHUNK];
+    let mut s = 0usize;
+    while s < n {
+        let m = (n - s).min(CHUNK);
+        p.row_depths(kind, j, i0 + s as u32, &mut buf[..m]);
+        for (k, &z) in buf[..m].iter().enumerate() {
+            f(s + k, z);
+        }
+        s += m;
+    }
+}
+
+/// Which depth a rule writes (see [`Prepared::row_depths`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Depth {
+    Centre,
+    Far,
+    Near,
+}
+
 #[inline]
 fn clamp_cols(l: i64, r: i64, width: u32) -> (u32, u32, bool) {
     let l = l.max(0);
@@ -282,73 +365,114 @@ fn clamp_cols(l: i64, r: i64, width: u32) -> (u32, u32, bool) {
     (l as u32, r.max(0) as u32, l <= r)
 }
 
-/// Standard rule: pixels whose centre lies in the (closed, dilated) polygon, with the
-/// depth at the centre.
-pub(crate) fn standard(p: &Prepared, width: u32, height: u32, mut f: impl FnMut(u32, u32, f32)) {
-    let j0 = ((p.ymin - EPS_PX - 0.5).ceil() as i64).max(0);
-    let j1 = ((p.ymax + EPS_PX - 0.5).floor() as i64).min(height as i64 - 1);
+/// Standard rule: pixels whose centre lies in the (closed, dilated) polygon, as spans
+/// `f(j, i0, i1)` (inclusive); their depth is [`Depth::Centre`].
+pub(crate) fn standard(p: &Prepared, width: u32, height: u32, mut f: impl FnMut(u32, u32, u32)) {
+    let j0 = ceil_i(p.ymin - EPS_PX - 0.5).max(0);
+    let j1 = floor_i(p.ymax + EPS_PX - 0.5).min(height as i64 - 1);
     for j in j0..=j1 {
         let yc = (j as f64 + 0.5).clamp(p.ymin, p.ymax);
         let Some((l, r)) = p.chord(yc) else { continue };
-        let (i0, i1, ok) = clamp_cols(
-            (l - EPS_PX - 0.5).ceil() as i64,
-            (r + EPS_PX - 0.5).floor() as i64,
-            width,
-        );
-        if !ok {
-            continue;
-        }
-        for i in i0..=i1 {
-            f(i, j as u32, p.centre_depth(i, j as u32));
+        let (i0, i1, ok) = clamp_cols(ceil_i(l - EPS_PX - 0.5), floor_i(r + EPS_PX - 0.5), width);
+        if ok {
+            f(j as u32, i0, i1);
         }
     }
 }
 
-/// Outer rule: every pixel whose closed square meets the polygon, with a lower bound of
-/// the polygon's depth in it.
-pub(crate) fn outer(p: &Prepared, width: u32, height: u32, mut f: impl FnMut(u32, u32, f32)) {
-    let (j0, j1) = p.rows(height);
-    for j in j0..=j1 {
-        let Some((l, r)) = p.span(j as f64, j as f64 + 1.0) else {
-            continue;
-        };
-        let (i0, i1, ok) = clamp_cols(
-            (l - EPS_PX).floor() as i64,
-            (r + EPS_PX).floor() as i64,
-            width,
-        );
-        if !ok {
-            continue;
-        }
-        for i in i0..=i1 {
-            f(i, j as u32, p.near_depth(i, j as u32));
+/// A chord at height `y`, reusing the previous row's when `y` is the same (rows share
+/// their boundary line): bitwise the value of [`Prepared::chord`].
+struct ChordCache {
+    y: f64,
+    c: Option<(f64, f64)>,
+}
+
+impl ChordCache {
+    fn new() -> Self {
+        ChordCache {
+            y: f64::NAN,
+            c: None,
         }
     }
+
+    #[inline]
+    fn get(&mut self, p: &Prepared, y: f64) -> Option<(f64, f64)> {
+        if y != self.y {
+            self.y = y;
+            self.c = p.chord(y);
+        }
+        self.c
+    }
+}
+
+/// Outer rule: every pixel whose closed square meets the polygon, as spans
+/// `f(j, i0, i1)`; their depth is [`Depth::Near`]. Stops (and returns true) as soon as
+/// `f` returns true.
+pub(crate) fn outer(
+    p: &Prepared,
+    width: u32,
+    height: u32,
+    mut f: impl FnMut(u32, u32, u32) -> bool,
+) -> bool {
+    let (j0, j1) = p.rows(height);
+    let (mut lo, mut hi) = (ChordCache::new(), ChordCache::new());
+    for j in j0..=j1 {
+        // The x-range over the band [j, j+1] (see `Prepared::span`), chords shared with
+        // the neighbouring rows.
+        let a = (j as f64).max(p.ymin);
+        let b = (j as f64 + 1.0).min(p.ymax);
+        if a > b {
+            continue;
+        }
+        std::mem::swap(&mut lo, &mut hi);
+        let Some((mut l, mut r)) = lo.get(p, a) else {
+            continue;
+        };
+        if let Some((l2, r2)) = hi.get(p, b) {
+            l = l.min(l2);
+            r = r.max(r2);
+        }
+        for e in &p.edges[..p.n] {
+            if a < e.py && e.py < b {
+                l = l.min(e.px);
+                r = r.max(e.px);
+            }
+        }
+        let (i0, i1, ok) = clamp_cols(floor_i(l - EPS_PX), floor_i(r + EPS_PX), width);
+        if ok && f(j as u32, i0, i1) {
+            return true;
+        }
+    }
+    false
 }
 
 /// Pixels `[l, r]` whose whole x-extent lies in the interval `(lo, hi)` shrunk by EPS.
 #[inline]
 fn inner_cols(lo: f64, hi: f64, width: u32) -> Option<(u32, u32)> {
-    let (i0, i1, ok) = clamp_cols(
-        (lo + EPS_PX).ceil() as i64,
-        (hi - EPS_PX).floor() as i64 - 1,
-        width,
-    );
+    let (i0, i1, ok) = clamp_cols(ceil_i(lo + EPS_PX), floor_i(hi - EPS_PX) - 1, width);
     ok.then_some((i0, i1))
 }
 
-/// Inner rule for one convex polygon: pixels entirely inside, with an upper bound of
-/// the polygon's depth in them.
-pub(crate) fn inner(p: &Prepared, width: u32, height: u32, mut f: impl FnMut(u32, u32, f32)) {
+/// Inner rule for one convex polygon: pixels entirely inside, as spans `f(j, i0, i1)`;
+/// their depth is [`Depth::Far`].
+pub(crate) fn inner(p: &Prepared, width: u32, height: u32, mut f: impl FnMut(u32, u32, u32)) {
     let (j0, j1) = p.rows(height);
+    let (mut lo, mut hi) = (ChordCache::new(), ChordCache::new());
     for j in j0..=j1 {
-        let Some((l, r)) = p.inner_chord(j as f64, j as f64 + 1.0) else {
+        let (a, b) = (j as f64, j as f64 + 1.0);
+        if p.ymin > a || p.ymax < b {
+            continue;
+        }
+        std::mem::swap(&mut lo, &mut hi);
+        let (Some((l1, r1)), Some((l2, r2))) = (lo.get(p, a), hi.get(p, b)) else {
             continue;
         };
+        let (l, r) = (l1.max(l2), r1.min(r2));
+        if l > r {
+            continue;
+        }
         if let Some((i0, i1)) = inner_cols(l, r, width) {
-            for i in i0..=i1 {
-                f(i, j as u32, p.far_depth(i, j as u32));
-            }
+            f(j as u32, i0, i1);
         }
     }
 }
@@ -386,36 +510,65 @@ fn intersect(a: &[(f64, f64)], b: &[(f64, f64)], out: &mut Vec<(f64, f64)>) {
     }
 }
 
-/// Inner rule for the union of convex pieces (see the module doc), with an upper bound
-/// of the union's depth in each covered pixel.
+/// Reusable buffers of [`inner_union`] (no allocation per draw once warm).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct UnionScratch {
+    order: Vec<usize>,
+    active: Vec<usize>,
+    events: Vec<f64>,
+    ivs: Vec<(f64, f64)>,
+    acc: Vec<(f64, f64)>,
+    tmp: Vec<(f64, f64)>,
+    far: Vec<f32>,
+}
+
+/// Inner rule for the union of convex pieces (see the module doc), as spans
+/// `f(j, i0, depths)` where `depths[k]` is an upper bound of the union's depth in pixel
+/// `(i0 + k, j)`.
 pub(crate) fn inner_union(
     pieces: &[Prepared],
     width: u32,
     height: u32,
-    mut f: impl FnMut(u32, u32, f32),
+    sc: &mut UnionScratch,
+    mut f: impl FnMut(u32, u32, &[f32]),
 ) {
     if pieces.is_empty() {
         return;
     }
     if pieces.len() == 1 {
-        return inner(&pieces[0], width, height, f);
+        let p = &pieces[0];
+        let far = &mut sc.far;
+        return inner(p, width, height, |j, i0, i1| {
+            let n = (i1 - i0 + 1) as usize;
+            far.clear();
+            far.resize(n, 0.0);
+            p.row_depths(Depth::Far, j, i0, far);
+            f(j, i0, far);
+        });
     }
-    let mut order: Vec<usize> = (0..pieces.len()).collect();
+    let UnionScratch {
+        order,
+        active,
+        events,
+        ivs,
+        acc,
+        tmp,
+        far,
+    } = sc;
+    order.clear();
+    order.extend(0..pieces.len());
     order.sort_by(|&a, &b| pieces[a].ymin.total_cmp(&pieces[b].ymin));
     let ymin = pieces.iter().map(|p| p.ymin).fold(f64::INFINITY, f64::min);
     let ymax = pieces
         .iter()
         .map(|p| p.ymax)
         .fold(f64::NEG_INFINITY, f64::max);
-    let j0 = (ymin.floor() as i64).max(0);
-    let j1 = ((ymax.ceil() as i64) - 1).min(height as i64 - 1);
-    let mut active: Vec<usize> = Vec::new();
+    let j0 = floor_i(ymin).max(0);
+    let j1 = (ceil_i(ymax) - 1).min(height as i64 - 1);
+    active.clear();
     let mut next = 0usize;
-    let mut events: Vec<f64> = Vec::new();
-    let mut ivs: Vec<(f64, f64)> = Vec::new();
-    let mut acc: Vec<(f64, f64)> = Vec::new();
-    let mut tmp: Vec<(f64, f64)> = Vec::new();
-    let mut far: Vec<f32> = vec![f32::NEG_INFINITY; width as usize];
+    far.clear();
+    far.resize(width as usize, f32::NEG_INFINITY);
     for j in j0..=j1 {
         let (a, b) = (j as f64, j as f64 + 1.0);
         while next < order.len() && pieces[order[next]].ymin < b {
@@ -429,13 +582,14 @@ pub(crate) fn inner_union(
         events.clear();
         events.push(a);
         events.push(b);
-        for &k in &active {
+        for &k in active.iter() {
             let p = &pieces[k];
             events.extend(p.ys[..p.n].iter().copied().filter(|&y| a < y && y < b));
         }
         events.sort_by(f64::total_cmp);
         events.dedup();
         let mut first = true;
+        acc.clear();
         for s in events.windows(2) {
             ivs.clear();
             ivs.extend(
@@ -443,13 +597,13 @@ pub(crate) fn inner_union(
                     .iter()
                     .filter_map(|&k| pieces[k].inner_chord(s[0], s[1])),
             );
-            merge(&mut ivs);
+            merge(ivs);
             if first {
-                std::mem::swap(&mut acc, &mut ivs);
+                std::mem::swap(acc, ivs);
                 first = false;
             } else {
-                intersect(&acc, &ivs, &mut tmp);
-                std::mem::swap(&mut acc, &mut tmp);
+                intersect(acc, ivs, tmp);
+                std::mem::swap(acc, tmp);
             }
             if acc.is_empty() {
                 break;
@@ -460,30 +614,22 @@ pub(crate) fn inner_union(
         }
         // Upper bound of the depth: the farthest depth of any piece touching the pixel.
         let mut touched = (u32::MAX, 0u32);
-        for &k in &active {
+        for &k in active.iter() {
             let p = &pieces[k];
             if let Some((l, r)) = p.span(a, b) {
-                let (i0, i1, ok) = clamp_cols(
-                    (l - EPS_PX).floor() as i64,
-                    (r + EPS_PX).floor() as i64,
-                    width,
-                );
+                let (i0, i1, ok) = clamp_cols(floor_i(l - EPS_PX), floor_i(r + EPS_PX), width);
                 if ok {
                     touched = (touched.0.min(i0), touched.1.max(i1));
-                    for i in i0..=i1 {
-                        let d = p.far_depth(i, j as u32);
-                        if d > far[i as usize] {
-                            far[i as usize] = d;
-                        }
-                    }
+                    let row = &mut far[i0 as usize..=i1 as usize];
+                    for_row_depths(p, Depth::Far, j as u32, i0, row.len(), |k, d| {
+                        row[k] = row[k].max(d);
+                    });
                 }
             }
         }
-        for &(l, r) in &acc {
+        for &(l, r) in acc.iter() {
             if let Some((i0, i1)) = inner_cols(l, r, width) {
-                for i in i0..=i1 {
-                    f(i, j as u32, far[i as usize]);
-                }
+                f(j as u32, i0, &far[i0 as usize..=i1 as usize]);
             }
         }
         if touched.0 <= touched.1 {

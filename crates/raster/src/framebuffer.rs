@@ -1,6 +1,6 @@
 //! Depth and object-id buffers, and the draw calls.
 
-use crate::coverage::{self, Prepared};
+use crate::coverage::{self, floor_i, for_row_depths, Depth, Prepared, UnionScratch};
 use crate::pyramid::DepthPyramid;
 use crate::view::{ScreenVertex, View};
 use crate::{Coverage, MAX_INPUT_VERTS};
@@ -23,6 +23,9 @@ pub struct Framebuffer {
     pub ids: Vec<u32>,
     scratch: Vec<ScreenVertex>,
     pieces: Vec<Prepared>,
+    union: UnionScratch,
+    /// Depths of one span (a row at most).
+    zrow: Vec<f32>,
 }
 
 impl Framebuffer {
@@ -36,6 +39,8 @@ impl Framebuffer {
             ids: vec![NO_ID; n],
             scratch: Vec::with_capacity(2 * MAX_INPUT_VERTS),
             pieces: Vec::new(),
+            union: UnionScratch::default(),
+            zrow: vec![0.0; width as usize],
         }
     }
 
@@ -103,18 +108,30 @@ impl Framebuffer {
         }
         let (w, h) = (self.width, self.height);
         let width = self.width as usize;
-        let (depth, ids) = (&mut self.depth, &mut self.ids);
-        let mut put = |i: u32, j: u32, z: f32| {
-            let k = j as usize * width + i as usize;
-            if z < depth[k] {
-                depth[k] = z;
-                ids[k] = id;
-            }
+        if self.zrow.len() < width {
+            self.zrow.resize(width, 0.0);
+        }
+        let (depth, ids, zrow) = (&mut self.depth, &mut self.ids, &mut self.zrow);
+        // One span of row `j`: depths of the span, then depth test and write over row
+        // slices (branch-free, no bounds checks per pixel).
+        let mut span = |kind: Depth, j: u32, i0: u32, i1: u32| {
+            let k0 = j as usize * width + i0 as usize;
+            let k1 = j as usize * width + i1 as usize;
+            let zs = &mut zrow[..=(i1 - i0) as usize];
+            p.row_depths(kind, j, i0, zs);
+            depth_test(zs, &mut depth[k0..=k1], &mut ids[k0..=k1], id);
         };
         match coverage {
-            Coverage::Standard => coverage::standard(&p, w, h, &mut put),
-            Coverage::Inner => coverage::inner(&p, w, h, &mut put),
-            Coverage::Outer => coverage::outer(&p, w, h, &mut put),
+            Coverage::Standard => {
+                coverage::standard(&p, w, h, |j, a, b| span(Depth::Centre, j, a, b))
+            }
+            Coverage::Inner => coverage::inner(&p, w, h, |j, a, b| span(Depth::Far, j, a, b)),
+            Coverage::Outer => {
+                coverage::outer(&p, w, h, |j, a, b| {
+                    span(Depth::Near, j, a, b);
+                    false
+                });
+            }
         }
     }
 
@@ -154,20 +171,21 @@ impl Framebuffer {
 
     /// Screen-space version of [`Framebuffer::draw_union`].
     pub fn draw_screen_union(&mut self, pieces: &[&[ScreenVertex]], id: u32) {
-        let prepared: Vec<Prepared> = pieces.iter().filter_map(|p| Prepared::new(p)).collect();
+        let mut prepared = std::mem::take(&mut self.pieces);
+        prepared.clear();
+        prepared.extend(pieces.iter().filter_map(|p| Prepared::new(p)));
         self.union_prepared(&prepared, id);
+        self.pieces = prepared;
     }
 
     fn union_prepared(&mut self, prepared: &[Prepared], id: u32) {
         let width = self.width as usize;
         let (w, h) = (self.width, self.height);
         let (depth, ids) = (&mut self.depth, &mut self.ids);
-        coverage::inner_union(prepared, w, h, |i, j, z| {
-            let k = j as usize * width + i as usize;
-            if z < depth[k] {
-                depth[k] = z;
-                ids[k] = id;
-            }
+        coverage::inner_union(prepared, w, h, &mut self.union, |j, i0, zs| {
+            let k0 = j as usize * width + i0 as usize;
+            let (d, ids) = (&mut depth[k0..k0 + zs.len()], &mut ids[k0..k0 + zs.len()]);
+            depth_test(zs, d, ids, id);
         });
     }
 
@@ -176,13 +194,22 @@ impl Framebuffer {
     /// the part inside the view's window is judged; a polygon reaching in front of the
     /// near plane is never occluded.
     pub fn polygon_occluded(&self, view: &View, poly: &[DVec3]) -> bool {
-        let depth_at = |i: u32, j: u32| self.depth[j as usize * self.width as usize + i as usize];
-        occluded_test(view, poly, self.width, self.height, &depth_at, None)
+        occluded_test(view, poly, self.width, self.height, &self.depth, None)
     }
 
     /// The hierarchical max-depth pyramid of the current depth buffer.
     pub fn pyramid(&self) -> DepthPyramid {
         DepthPyramid::build(self)
+    }
+}
+
+/// Keep the strictly nearer of `zs` and `d` per pixel, with its id (branch-free).
+#[inline]
+fn depth_test(zs: &[f32], d: &mut [f32], ids: &mut [u32], id: u32) {
+    for ((&z, d), i) in zs.iter().zip(d.iter_mut()).zip(ids.iter_mut()) {
+        let nearer = z < *d;
+        *d = if nearer { z } else { *d };
+        *i = if nearer { id } else { *i };
     }
 }
 
@@ -209,13 +236,13 @@ pub(crate) fn occluded_test(
     poly: &[DVec3],
     width: u32,
     height: u32,
-    depth_at: &dyn Fn(u32, u32) -> f32,
+    depth: &[f32],
     pyramid: Option<&DepthPyramid>,
 ) -> bool {
     if poly.len() > MAX_INPUT_VERTS {
         return fan(poly)
             .iter()
-            .all(|c| occluded_test(view, c, width, height, depth_at, pyramid));
+            .all(|c| occluded_test(view, c, width, height, depth, pyramid));
     }
     if poly.iter().any(|p| view.to_camera(*p).z < view.near) {
         return false;
@@ -224,14 +251,15 @@ pub(crate) fn occluded_test(
     if view.clip_project(poly, &mut sv) < 3 {
         return false;
     }
-    screen_occluded(&sv, width, height, depth_at, pyramid)
+    screen_occluded(&sv, width, height, depth, pyramid)
 }
 
+/// `depth` is the level-0 depth buffer (`width × height`, row-major).
 pub(crate) fn screen_occluded(
     sv: &[ScreenVertex],
     width: u32,
     height: u32,
-    depth_at: &dyn Fn(u32, u32) -> f32,
+    depth: &[f32],
     pyramid: Option<&DepthPyramid>,
 ) -> bool {
     let Some(p) = Prepared::new(sv) else {
@@ -241,23 +269,27 @@ pub(crate) fn screen_occluded(
         return true;
     }
     if let Some(pyr) = pyramid {
-        let x0 = ((p.xmin - coverage::EPS_PX).floor().max(0.0)) as u32;
-        let y0 = ((p.ymin - coverage::EPS_PX).floor().max(0.0)) as u32;
-        let x1 = ((p.xmax + coverage::EPS_PX).floor() as i64)
+        let x0 = floor_i(p.xmin - coverage::EPS_PX).max(0) as u32;
+        let y0 = floor_i(p.ymin - coverage::EPS_PX).max(0) as u32;
+        let x1 = floor_i(p.xmax + coverage::EPS_PX)
             .min(width as i64 - 1)
             .max(0) as u32;
-        let y1 = ((p.ymax + coverage::EPS_PX).floor() as i64)
+        let y1 = floor_i(p.ymax + coverage::EPS_PX)
             .min(height as i64 - 1)
             .max(0) as u32;
         if pyr.rect_occluded(x0, y0, x1, y1, p.min_depth()) {
             return true;
         }
     }
-    let mut visible = false;
-    coverage::outer(&p, width, height, |i, j, z| {
-        if !visible && depth_at(i, j) >= z {
-            visible = true;
-        }
+    let w = width as usize;
+    let visible = coverage::outer(&p, width, height, |j, i0, i1| {
+        let k0 = j as usize * w + i0 as usize;
+        let row = &depth[k0..=k0 + (i1 - i0) as usize];
+        let mut seen = false;
+        for_row_depths(&p, Depth::Near, j, i0, row.len(), |k, z| {
+            seen |= row[k] >= z;
+        });
+        seen
     });
     !visible
 }

@@ -122,7 +122,7 @@ impl DepthPyramid {
     /// [`Framebuffer::polygon_occluded`] for the exact semantics).
     pub fn polygon_occluded(&self, view: &View, poly: &[DVec3]) -> bool {
         let (w, h) = self.size();
-        occluded_test(view, poly, w, h, &|i, j| self.depth_at(i, j), Some(self))
+        occluded_test(view, poly, w, h, &self.levels[0].max, Some(self))
     }
 
     /// Whether a world triangle is hidden in `view`.
@@ -133,6 +133,6 @@ impl DepthPyramid {
     /// Screen-space version of [`DepthPyramid::polygon_occluded`].
     pub fn screen_polygon_occluded(&self, poly: &[ScreenVertex]) -> bool {
         let (w, h) = self.size();
-        screen_occluded(poly, w, h, &|i, j| self.depth_at(i, j), Some(self))
+        screen_occluded(poly, w, h, &self.levels[0].max, Some(self))
     }
 }

@@ -105,14 +105,14 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         .collect();
     let title = match &method {
         Some(m) => format!(
-            "{m}: PVS {} / VS {} / {} objects, missed {}",
+            "{m}, cell {cell}: PVS {} / VS {} / {} objects, missed {}",
             pvs.as_ref().map_or(0, Vec::len),
             truth.visible.len(),
             sc.objects.len(),
             classes.iter().filter(|c| **c == Class::Missed).count()
         ),
         None => format!(
-            "ground truth: VS {} / {} objects",
+            "ground truth, cell {cell}: VS {} / {} objects",
             truth.visible.len(),
             sc.objects.len()
         ),
@@ -146,8 +146,10 @@ fn render(
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
         root.fill(&BACKGROUND).context("drawing the map")?;
-        // Objects with holes (courtyards) first, so what stands in a courtyard stays on top;
-        // then by class so the interesting classes are drawn last.
+        // Ground surfaces (flat objects: streets, squares, parks) first and translucent,
+        // so they never veil a building; then objects with holes (courtyards), so what
+        // stands in a courtyard stays on top; then by class so the interesting classes
+        // are drawn last.
         let mut order: Vec<usize> = (0..scene.objects.len()).collect();
         let rank = |c: Class| match c {
             Class::Hidden => 0,
@@ -155,10 +157,12 @@ fn render(
             Class::Visible => 2,
             Class::Missed => 3,
         };
+        let is_flat = |id: usize| matches!(scene.objects[id].geometry, Geometry::Flat(_));
         order.sort_by_key(|&id| {
             let holes = footprints(scene, id).iter().any(|p| !p.holes.is_empty());
-            (!holes, rank(classes[id]))
+            (!is_flat(id), !holes, rank(classes[id]))
         });
+        let any_flat = (0..scene.objects.len()).any(is_flat);
         for id in order {
             let flat = matches!(scene.objects[id].geometry, Geometry::Flat(_));
             let c = classes[id].color();
@@ -222,6 +226,10 @@ fn render(
             entries.push((MAGENTA, "MISSED (seen, not in PVS)"));
         }
         entries.push((GREEN, "viewcell"));
+        if any_flat {
+            // Grey at 35 % over the white background, as drawn.
+            entries.push((RGBColor(230, 230, 230), "pale: ground surfaces"));
+        }
         let mut x = 20;
         let ly = y0 + 40;
         for (c, label) in entries {
