@@ -120,50 +120,64 @@ impl CoverageBuilder {
     pub fn finish(mut self) -> DepthMap {
         let n = self.n;
         let mut depth = vec![f32::INFINITY; n * n];
-        let mut parent: Vec<usize> = Vec::new();
-        let mut span: Vec<(f64, f64)> = Vec::new();
-        fn find(parent: &mut [usize], mut k: usize) -> usize {
-            while parent[k] != k {
-                parent[k] = parent[parent[k]];
-                k = parent[k];
-            }
-            k
-        }
+        let mut comps: Vec<Component> = Vec::new();
+        let mut hits: Vec<usize> = Vec::new();
         for (j, row) in self.rows.iter_mut().enumerate() {
             if row.is_empty() {
                 continue;
             }
             row.sort_by(|a, b| a.depth.total_cmp(&b.depth));
-            parent.clear();
-            span.clear();
+            comps.clear();
             let out = &mut depth[j * n..(j + 1) * n];
             for k in 0..row.len() {
                 let b = row[k];
-                parent.push(k);
-                span.push((b.l0.max(b.l1), b.r0.min(b.r1)));
-                let mut skip: (f64, f64) = (0.0, -1.0);
-                for (m, bm) in row.iter().enumerate().take(k) {
-                    if !bm.overlaps(&b) {
-                        continue;
+                // The components `b` joins: those with a member overlapping it at both
+                // ordinates (their hull at the two ordinates is a cheap first filter).
+                hits.clear();
+                for (c, comp) in comps.iter().enumerate() {
+                    if comp.alive
+                        && comp.hull.overlaps(&b)
+                        && comp.members.iter().any(|&m| row[m].overlaps(&b))
+                    {
+                        hits.push(c);
                     }
-                    let (rm, rk) = (find(&mut parent, m), find(&mut parent, k));
-                    if rm == rk {
-                        continue;
-                    }
-                    let (om, ok) = (span[rm], span[rk]);
-                    // Only components that existed before this band were assigned.
-                    if om.1 - om.0 > skip.1 - skip.0 {
-                        skip = om;
-                    }
-                    parent[rm] = rk;
-                    span[rk] = (om.0.min(ok.0), om.1.max(ok.1));
                 }
-                let root = find(&mut parent, k);
-                let (lo, hi) = span[root];
+                let own = (b.l0.max(b.l1), b.r0.min(b.r1));
+                let (target, skip) =
+                    match hits.iter().copied().max_by_key(|&c| comps[c].members.len()) {
+                        None => {
+                            comps.push(Component {
+                                members: vec![k],
+                                hull: b,
+                                span: own,
+                                alive: true,
+                            });
+                            (comps.len() - 1, (0.0, -1.0))
+                        }
+                        Some(t) => {
+                            let skip = comps[t].span;
+                            for &c in hits.iter().filter(|&&c| c != t) {
+                                let other = std::mem::take(&mut comps[c].members);
+                                let (h, sp) = (comps[c].hull, comps[c].span);
+                                comps[c].alive = false;
+                                let tc = &mut comps[t];
+                                tc.members.extend(other);
+                                tc.hull = tc.hull.hull(&h);
+                                tc.span = (tc.span.0.min(sp.0), tc.span.1.max(sp.1));
+                            }
+                            let tc = &mut comps[t];
+                            tc.members.push(k);
+                            tc.hull = tc.hull.hull(&b);
+                            tc.span = (tc.span.0.min(own.0), tc.span.1.max(own.1));
+                            (t, skip)
+                        }
+                    };
+                let (lo, hi) = comps[target].span;
                 if !(hi > lo) {
                     continue;
                 }
-                // Pixels of an earlier component were assigned with a smaller depth.
+                // Pixels of the largest earlier component were assigned with a smaller
+                // depth; the others are assigned only where still uncovered.
                 let (s0, s1) = (skip.0.ceil(), skip.1.floor());
                 let i0 = lo.ceil().max(0.0) as i64;
                 let i1 = (hi.floor() as i64).min(n as i64);
@@ -183,6 +197,16 @@ impl CoverageBuilder {
     }
 }
 
+/// Bands joined into one component of a row: their union is an interval at every
+/// ordinate of the row, and it covers the abscissae `span` over the row's height.
+struct Component {
+    members: Vec<usize>,
+    /// The hull of the members' extents at the two ordinates.
+    hull: Band,
+    span: (f64, f64),
+    alive: bool,
+}
+
 /// A convex piece's extent along one pixel row `[j, j+1]`: `[l0, r0]` at ordinate `j`,
 /// `[l1, r1]` at `j + 1`.
 #[derive(Clone, Copy, Debug)]
@@ -195,6 +219,17 @@ struct Band {
 }
 
 impl Band {
+    /// The smallest band containing both at each ordinate.
+    fn hull(&self, o: &Band) -> Band {
+        Band {
+            l0: self.l0.min(o.l0),
+            r0: self.r0.max(o.r0),
+            l1: self.l1.min(o.l1),
+            r1: self.r1.max(o.r1),
+            depth: self.depth.max(o.depth),
+        }
+    }
+
     /// Overlap at both ordinates (hence at every ordinate between, by convexity).
     fn overlaps(&self, o: &Band) -> bool {
         let t = MERGE_TOL_PX;

@@ -43,7 +43,7 @@ use depth_map::{depth_down, depth_up, pixel_range, CoverageBuilder, DepthMap};
 use occludee::occludee_projection;
 use occluders::OccluderSet;
 use planes::{candidate_positions, Direction, LocalBox, Plane, PLANE_EXTENSION};
-use projection::{extended_projection, polygon_area, FACE_CLEARANCE_M};
+use projection::{plane_safe_projections, FACE_CLEARANCE_M};
 use sightline_geom::{Aabb3, DVec2, DVec3, ViewCell};
 use sightline_scene::Scene;
 use std::sync::Arc;
@@ -91,8 +91,8 @@ impl Default for Params {
             kernel_px: 5,
             solid_angle: 0.002,
             max_occluders: 600,
-            plane_candidates: 16,
-            planes_per_direction: 2,
+            plane_candidates: 20,
+            planes_per_direction: 3,
             occludee_splits: 2,
             adaptive_budget: None,
             adaptive_min_m: 5.0,
@@ -113,6 +113,12 @@ impl Params {
         p
     }
 }
+
+/// Resolution (pixels per side) of the depth maps on which candidate planes are scored.
+pub const SCORING_PX: usize = 128;
+
+/// Candidate planes just inside an occluder's near face lie this far behind it (m).
+pub const SLICE_INSET_M: f64 = 0.25;
 
 /// `ext-proj` prepared for a scene.
 pub struct ExtProj {
@@ -145,8 +151,12 @@ pub struct PlaneMap {
 impl PlaneMap {
     /// Whether the occludee box (world) is hidden on this plane.
     pub fn hides(&self, b: &Aabb3, improved: bool) -> bool {
-        let occ = self.plane.dir.box_to_local(b.min, b.max);
-        let Some((rect, depth)) = occludee_projection(&self.cell, &occ, self.plane.x, improved)
+        self.hides_local(&self.plane.dir.box_to_local(b.min, b.max), improved)
+    }
+
+    /// Whether the occludee box (in this plane's local frame) is hidden on this plane.
+    pub fn hides_local(&self, occ: &LocalBox, improved: bool) -> bool {
+        let Some((rect, depth)) = occludee_projection(&self.cell, occ, self.plane.x, improved)
         else {
             return false;
         };
@@ -160,7 +170,7 @@ impl PlaneMap {
 }
 
 /// A convex occluder piece in one direction's local frame.
-pub(crate) struct LocalPiece {
+pub struct LocalPiece {
     pub index: u32,
     pub vertices: Vec<DVec3>,
     pub near: f64,
@@ -199,12 +209,7 @@ impl ExtProj {
 
     /// The occluder pieces relevant to `cell` in direction `dir`, clipped beyond the
     /// cell's far face, largest solid angle first, at most `max_occluders`.
-    pub(crate) fn local_pieces(
-        &self,
-        cell: &ViewCell,
-        dir: Direction,
-        ids: &[u32],
-    ) -> Vec<LocalPiece> {
+    pub fn local_pieces(&self, cell: &ViewCell, dir: Direction, ids: &[u32]) -> Vec<LocalPiece> {
         let lc = dir.box_to_local(cell.min, cell.max);
         let w_min = lc.max.x + FACE_CLEARANCE_M;
         let mut out: Vec<LocalPiece> = Vec::new();
@@ -237,69 +242,74 @@ impl ExtProj {
         out
     }
 
-    /// §6.1 "Choice of the projection plane": a candidate plane just behind each
-    /// occluder, scored by the fraction of its pixels the Projections and slices fill.
-    /// The best `planes_per_direction` candidates are kept, each at least 1.5× nearer
-    /// or farther (from the cell's face) than those already kept: a near plane
-    /// captures slices of the nearby blocks, a far one the umbra of whole rows.
-    pub(crate) fn choose_planes(
+    /// §6.1 "Choice of the projection plane": candidate planes just behind each
+    /// occluder (the paper) and just inside its near face (a slice of the whole
+    /// street front, §3.3), at most `plane_candidates` of them. The paper scores a
+    /// candidate by the pixels its Projections fill; that favours planes hugging the
+    /// cell, whose few filled pixels are useless as soon as one gap faces the cell
+    /// (every occludee's Projection then contains the cell's cross-section). We score
+    /// each candidate by what the filled pixels are for: the occludee boxes it hides,
+    /// on a depth map at reduced resolution. The planes are then kept greedily, each
+    /// maximizing the boxes not hidden by the planes kept before it (at most
+    /// `planes_per_direction`; none when no candidate hides anything).
+    pub fn choose_planes(
         &self,
         dir: Direction,
         lc: &LocalBox,
         pieces: &[LocalPiece],
+        occludees: &[LocalBox],
     ) -> Vec<f64> {
-        let scoring: Vec<&LocalPiece> = pieces.iter().take(48).collect();
-        let fars: Vec<f64> = scoring.iter().map(|p| p.far + 1e-3).collect();
-        let cands = candidate_positions(&fars, self.params.plane_candidates);
-        let mut scored: Vec<(f64, f64)> = Vec::new();
-        for x in cands {
-            let plane = Plane::new(dir, lc, x, self.params.resolution_px, self.params.extension);
-            let mut filled = 0.0;
-            for p in &scoring {
-                if let Some((poly, _)) = extended_projection(&p.vertices, lc, x) {
-                    filled += polygon_area(&poly).abs();
-                }
-                if p.near < x && x < p.far {
-                    if let Some(s) = self.occluders.pieces[p.index as usize]
-                        .occluder
-                        .slice(dir, x)
-                    {
-                        filled += polygon_area(&s).abs();
-                    }
-                }
-            }
-            let score = filled / plane.rect.size().x / plane.rect.size().y;
-            if score > 0.0 {
-                scored.push((x, score));
-            }
+        let occludees: Vec<&LocalBox> = occludees.iter().filter(|o| o.min.x > lc.max.x).collect();
+        if occludees.is_empty() || pieces.is_empty() {
+            return vec![];
         }
-        scored.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.total_cmp(&b.0)));
+        let mut depths: Vec<f64> = pieces.iter().map(|p| p.far + 1e-3).collect();
+        depths.extend(pieces.iter().map(|p| p.near + SLICE_INSET_M));
+        let cands = candidate_positions(&depths, self.params.plane_candidates);
+        let n = self.params.resolution_px.min(SCORING_PX);
+        let hidden: Vec<(f64, Vec<bool>)> = cands
+            .into_iter()
+            .filter(|&x| x > lc.max.x)
+            .map(|x| {
+                let plane = Plane::new(dir, lc, x, n, self.params.extension);
+                let pm = PlaneMap {
+                    plane,
+                    cell: *lc,
+                    map: self.depth_map(&plane, lc, pieces),
+                };
+                let h = occludees
+                    .iter()
+                    .map(|o| pm.hides_local(o, self.params.improved))
+                    .collect();
+                (x, h)
+            })
+            .collect();
+        let mut done = vec![false; occludees.len()];
         let mut kept: Vec<f64> = Vec::new();
-        for (x, _) in scored {
-            if kept.len() >= self.params.planes_per_direction {
+        while kept.len() < self.params.planes_per_direction {
+            let gain = |h: &[bool]| h.iter().zip(&done).filter(|(h, d)| **h && !**d).count();
+            let best = hidden
+                .iter()
+                .filter(|(x, _)| !kept.contains(x))
+                .map(|(x, h)| (gain(h), *x, h))
+                .max_by(|a, b| a.0.cmp(&b.0).then(b.1.total_cmp(&a.1)));
+            let Some((g, x, h)) = best else { break };
+            if g == 0 {
                 break;
             }
-            let d = x - lc.max.x;
-            if kept.iter().all(|k| {
-                let dk = k - lc.max.x;
-                d > 1.5 * dk || dk > 1.5 * d
-            }) {
-                kept.push(x);
+            kept.push(x);
+            for (d, h) in done.iter_mut().zip(h) {
+                *d |= *h;
             }
         }
         kept
     }
 
     /// Draw the Projections (and slices) of `pieces` on `plane` into a depth map.
-    pub(crate) fn depth_map(
-        &self,
-        plane: &Plane,
-        lc: &LocalBox,
-        pieces: &[LocalPiece],
-    ) -> DepthMap {
+    pub fn depth_map(&self, plane: &Plane, lc: &LocalBox, pieces: &[LocalPiece]) -> DepthMap {
         let mut b = CoverageBuilder::new(plane.n);
         for p in pieces {
-            if let Some((poly, depth)) = extended_projection(&p.vertices, lc, plane.x) {
+            for (poly, depth) in plane_safe_projections(&p.vertices, lc, plane.x) {
                 let px: Vec<DVec2> = poly.iter().map(|q| plane.to_px(*q)).collect();
                 b.add_convex(&px, depth_up(depth));
             }
@@ -316,8 +326,15 @@ impl ExtProj {
         b.finish()
     }
 
-    /// The six (or fewer) depth-mapped planes of `cell` (§6.1).
+    /// The depth-mapped planes of `cell` (§6.1), chosen for all the scene's objects.
     pub fn plane_maps(&self, cell: &ViewCell) -> Vec<PlaneMap> {
+        let all: Vec<u32> = (0..self.scene.objects.len() as u32).collect();
+        self.plane_maps_for(cell, &all)
+    }
+
+    /// The depth-mapped planes of `cell` (§6.1), chosen to hide the occludees of
+    /// `candidates` (object ids).
+    pub fn plane_maps_for(&self, cell: &ViewCell, candidates: &[u32]) -> Vec<PlaneMap> {
         let ids = self.occluders.relevant(&cell.aabb());
         let mut maps = Vec::new();
         for dir in Direction::ALL {
@@ -326,7 +343,12 @@ impl ExtProj {
             if pieces.is_empty() {
                 continue;
             }
-            for x in self.choose_planes(dir, &lc, &pieces) {
+            let occludees: Vec<LocalBox> = candidates
+                .iter()
+                .flat_map(|&id| self.boxes[id as usize].iter())
+                .map(|b| dir.box_to_local(b.min, b.max))
+                .collect();
+            for x in self.choose_planes(dir, &lc, &pieces, &occludees) {
                 let plane = Plane::new(
                     dir,
                     &lc,
@@ -378,7 +400,7 @@ impl ExtProj {
 
     /// PVS of `cell` restricted to `candidates` (sorted object ids).
     pub fn pvs_among(&self, cell: &ViewCell, candidates: &[u32]) -> Vec<u32> {
-        let maps = self.plane_maps(cell);
+        let maps = self.plane_maps_for(cell, candidates);
         let sweep = if self.params.sweep {
             sweep::Sweep::run(self, cell)
         } else {
