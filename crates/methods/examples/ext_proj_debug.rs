@@ -17,6 +17,55 @@ use std::sync::Arc;
 
 fn main() {
     let a: Vec<String> = std::env::args().skip(1).collect();
+    let env = |k: &str| std::env::var(k).ok().and_then(|s| s.parse::<usize>().ok());
+    let mut params = Params::default();
+    if let Some(m) = env("EXTPROJ_MAXOCC") {
+        params.max_occluders = m;
+    }
+    if let Some(m) = env("EXTPROJ_CANDS") {
+        params.plane_candidates = m;
+    }
+    if let Some(m) = env("EXTPROJ_PPD") {
+        params.planes_per_direction = m;
+    }
+    if let Some(m) = env("EXTPROJ_SPLITS") {
+        params.occludee_splits = m as u32;
+    }
+    // `ext_proj_debug SCENE CELLS.json`: mean PVS and time per cell of those cells.
+    if a.len() == 2 {
+        let scene = match import::load(std::path::Path::new(&a[0]), &Default::default()) {
+            Ok(s) => Arc::new(s),
+            Err(e) => {
+                eprintln!("{e}");
+                std::process::exit(1);
+            }
+        };
+        let text = std::fs::read_to_string(&a[1]).unwrap_or_default();
+        let cells: Vec<[f64; 6]> = parse_cells(&text);
+        let ext = ExtProj::new(scene.clone(), params);
+        let all: Vec<u32> = (0..scene.objects.len() as u32).collect();
+        let mut sizes = Vec::new();
+        let mut ms = Vec::new();
+        for c in &cells {
+            let Ok(cell) =
+                ViewCell::new(DVec3::new(c[0], c[1], c[2]), DVec3::new(c[3], c[4], c[5]))
+            else {
+                continue;
+            };
+            let t = std::time::Instant::now();
+            sizes.push(ext.pvs_among(&cell, &all).len());
+            ms.push(t.elapsed().as_secs_f64() * 1e3);
+        }
+        ms.sort_by(f64::total_cmp);
+        let mean = sizes.iter().sum::<usize>() as f64 / sizes.len().max(1) as f64;
+        println!(
+            "{} cells: mean PVS {mean:.1} of {}, median {:.0} ms/cell; sizes {sizes:?}",
+            sizes.len(),
+            scene.objects.len(),
+            ms.get(ms.len() / 2).copied().unwrap_or(0.0)
+        );
+        return;
+    }
     if a.len() < 8 {
         eprintln!("usage: ext_proj_debug SCENE x0 y0 z0 x1 y1 z1 OUTDIR");
         std::process::exit(2);
@@ -38,7 +87,23 @@ fn main() {
     };
     let out = std::path::PathBuf::from(&a[7]);
     let _ = std::fs::create_dir_all(&out);
-    let ext = ExtProj::new(scene.clone(), Params::default());
+    let ext = ExtProj::new(scene.clone(), params);
+    let t = std::time::Instant::now();
+    let ids = ext.occluders.relevant(&cell.aabb());
+    for dir in Direction::ALL {
+        println!(
+            "{}: {} relevant pieces, {} selected",
+            dir.name(),
+            ids.len(),
+            ext.local_pieces(&cell, dir, &ids).len()
+        );
+    }
+    let pvs = ext.pvs_among(&cell, &(0..scene.objects.len() as u32).collect::<Vec<_>>());
+    println!(
+        "pvs {} in {:.0} ms",
+        pvs.len(),
+        t.elapsed().as_secs_f64() * 1e3
+    );
     // EXTPROJ_AT="10,40,80": planes at these distances beyond the cell's far face
     // in every horizontal direction instead of the chosen ones.
     let maps = match std::env::var("EXTPROJ_AT") {
@@ -274,4 +339,15 @@ fn png(w: usize, h: usize, rgb: &[u8]) -> Vec<u8> {
     chunk(&mut out, b"IDAT", &z);
     chunk(&mut out, b"IEND", &[]);
     out
+}
+
+/// The numbers of a cells.json (`[[x0,y0,z0,x1,y1,z1], ...]`), six by six.
+fn parse_cells(text: &str) -> Vec<[f64; 6]> {
+    let nums: Vec<f64> = text
+        .split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-' || c == 'e' || c == 'E'))
+        .filter_map(|s| s.parse().ok())
+        .collect();
+    nums.chunks_exact(6)
+        .map(|c| [c[0], c[1], c[2], c[3], c[4], c[5]])
+        .collect()
 }

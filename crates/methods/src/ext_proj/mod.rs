@@ -90,10 +90,10 @@ impl Default for Params {
             sweep_planes: 15,
             kernel_px: 5,
             solid_angle: 0.002,
-            max_occluders: 600,
-            plane_candidates: 20,
+            max_occluders: 3000,
+            plane_candidates: 12,
             planes_per_direction: 3,
-            occludee_splits: 2,
+            occludee_splits: 3,
             adaptive_budget: None,
             adaptive_min_m: 5.0,
         }
@@ -117,8 +117,22 @@ impl Params {
 /// Resolution (pixels per side) of the depth maps on which candidate planes are scored.
 pub const SCORING_PX: usize = 128;
 
+/// Candidate planes are scored with at most this many occluder pieces (the largest).
+pub const SCORING_PIECES: usize = 1500;
+
 /// Candidate planes just inside an occluder's near face lie this far behind it (m).
 pub const SLICE_INSET_M: f64 = 0.25;
+
+/// Whether the local box `b` meets the frustum of the planes of a direction: the
+/// cell's cross-section grown by the distance from its near face and scaled by
+/// `extension` about its centre, as [`Plane::new`] does, at `b`'s far depth.
+fn in_frustum(lc: &LocalBox, b: &LocalBox, extension: f64) -> bool {
+    let grow = (b.max.x - lc.min.x).max(0.0);
+    let (cu, cv) = (0.5 * (lc.min.y + lc.max.y), 0.5 * (lc.min.z + lc.max.z));
+    let hu = (0.5 * (lc.max.y - lc.min.y) + grow) * extension;
+    let hv = (0.5 * (lc.max.z - lc.min.z) + grow) * extension;
+    b.max.y >= cu - hu && b.min.y <= cu + hu && b.max.z >= cv - hv && b.min.z <= cv + hv
+}
 
 /// `ext-proj` prepared for a scene.
 pub struct ExtProj {
@@ -208,7 +222,9 @@ impl ExtProj {
     }
 
     /// The occluder pieces relevant to `cell` in direction `dir`, clipped beyond the
-    /// cell's far face, largest solid angle first, at most `max_occluders`.
+    /// cell's far face, largest solid angle first, at most `max_occluders`. Pieces
+    /// outside the direction's extended frustum are left to the other directions: their
+    /// Projections fall outside this direction's planes.
     pub fn local_pieces(&self, cell: &ViewCell, dir: Direction, ids: &[u32]) -> Vec<LocalPiece> {
         let lc = dir.box_to_local(cell.min, cell.max);
         let w_min = lc.max.x + FACE_CLEARANCE_M;
@@ -216,7 +232,7 @@ impl ExtProj {
         for &i in ids {
             let piece = &self.occluders.pieces[i as usize];
             let lb = dir.box_to_local(piece.bounds.min, piece.bounds.max);
-            if lb.max.x <= w_min {
+            if lb.max.x <= w_min || !in_frustum(&lc, &lb, self.params.extension) {
                 continue;
             }
             let vertices = piece.occluder.local_vertices(dir, w_min);
@@ -249,7 +265,7 @@ impl ExtProj {
     /// cell, whose few filled pixels are useless as soon as one gap faces the cell
     /// (every occludee's Projection then contains the cell's cross-section). We score
     /// each candidate by what the filled pixels are for: the occludee boxes it hides,
-    /// on a depth map at reduced resolution. The planes are then kept greedily, each
+    /// on a depth map at reduced resolution drawn with the largest pieces. The planes are then kept greedily, each
     /// maximizing the boxes not hidden by the planes kept before it (at most
     /// `planes_per_direction`; none when no candidate hides anything).
     pub fn choose_planes(
@@ -275,7 +291,7 @@ impl ExtProj {
                 let pm = PlaneMap {
                     plane,
                     cell: *lc,
-                    map: self.depth_map(&plane, lc, pieces),
+                    map: self.depth_map(&plane, lc, &pieces[..pieces.len().min(SCORING_PIECES)]),
                 };
                 let h = occludees
                     .iter()
