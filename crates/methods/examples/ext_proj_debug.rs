@@ -11,7 +11,7 @@ use sightline_methods::ext_proj::depth_map::pixel_range;
 use sightline_methods::ext_proj::occludee::occludee_projection;
 use sightline_methods::ext_proj::planes::{Direction, Plane};
 use sightline_methods::ext_proj::projection::extended_projection;
-use sightline_methods::ext_proj::{ExtProj, Params, PlaneMap};
+use sightline_methods::ext_proj::{adaptive, ExtProj, Params, PlaneMap};
 use sightline_scene::import;
 use std::sync::Arc;
 
@@ -30,6 +30,12 @@ fn main() {
     }
     if let Some(m) = env("EXTPROJ_SPLITS") {
         params.occludee_splits = m as u32;
+    }
+    if let Some(m) = env("EXTPROJ_BUDGET") {
+        params.adaptive_budget = Some(m);
+    }
+    if let Some(m) = env("EXTPROJ_MINM") {
+        params.adaptive_min_m = m as f64;
     }
     // `ext_proj_debug SCENE CELLS.json`: mean PVS and time per cell of those cells.
     if a.len() == 2 {
@@ -53,7 +59,10 @@ fn main() {
                 continue;
             };
             let t = std::time::Instant::now();
-            sizes.push(ext.pvs_among(&cell, &all).len());
+            sizes.push(match ext.params.adaptive_budget {
+                Some(b) => adaptive::pvs(&ext, &cell, &all, b).len(),
+                None => ext.pvs_among(&cell, &all).len(),
+            });
             ms.push(t.elapsed().as_secs_f64() * 1e3);
         }
         ms.sort_by(f64::total_cmp);

@@ -23,7 +23,8 @@
 //!    previous occlusion map re-projected (eroded by the inverse image of the
 //!    equivalent planar cell) and new occluders — including every mesh triangle, the
 //!    leaves of a forest — added at each plane;
-//! 6. optionally the adaptive subdivision of §6.1 ([`adaptive`]).
+//! 6. the adaptive subdivision of §6.1 ([`adaptive`]); by default (budget 0, minimum
+//!    25 m) it splits only cells wider than 50 m, down to 25 m.
 //!
 //! Parameters: `resolution_px` (default 256, rounded up to a power of two as the
 //! pyramid needs, §7.1), `sweep`, `planes` (number of sweep planes per direction,
@@ -77,6 +78,7 @@ pub struct Params {
     /// Adaptive subdivision (§6.1): split a cell while its PVS has more objects than
     /// this (None = off), down to `adaptive_min_m`.
     pub adaptive_budget: Option<usize>,
+    /// A cell is not split when its halves would be narrower than this (m).
     pub adaptive_min_m: f64,
 }
 
@@ -94,8 +96,11 @@ impl Default for Params {
             plane_candidates: 12,
             planes_per_direction: 3,
             occludee_splits: 3,
-            adaptive_budget: None,
-            adaptive_min_m: 5.0,
+            // By default every cell wider than 50 m is split down to halves of at least
+            // 25 m: a deep cell's occludee Projections (which contain the cell's
+            // cross-section) are too large for street fronts with gaps to cover.
+            adaptive_budget: Some(0),
+            adaptive_min_m: 25.0,
         }
     }
 }
