@@ -421,6 +421,73 @@ mod tests {
         assert_eq!(m.at(7, 0), 2.0);
     }
 
+    /// Random convex pieces, many overlapping: every pixel given depth `d` must lie
+    /// inside the union of the pieces of depth ≤ `d` (checked on a grid of points of
+    /// the pixel, its border included), and a chain of pieces each overlapping the
+    /// next fuses into one component.
+    #[test]
+    fn union_coverage_is_conservative() {
+        let mut s = 0x2545_f491_4f6c_dd1du64;
+        let mut rnd = move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let n = 32;
+        for _ in 0..20 {
+            let mut b = CoverageBuilder::new(n);
+            let mut polys: Vec<(Vec<DVec2>, f32)> = Vec::new();
+            for _ in 0..12 {
+                let c = DVec2::new(rnd() * 32.0, rnd() * 32.0);
+                let r = 2.0 + rnd() * 8.0;
+                let a0 = rnd() * 6.3;
+                let poly: Vec<DVec2> = (0..5)
+                    .map(|k| {
+                        let a = a0 + k as f64 * std::f64::consts::TAU / 5.0;
+                        c + DVec2::new(a.cos(), a.sin()) * r
+                    })
+                    .collect();
+                let d = (rnd() * 4.0) as f32;
+                b.add_convex(&poly, d);
+                polys.push((poly, d));
+            }
+            let m = b.finish();
+            let inside = |poly: &[DVec2], q: DVec2| {
+                (0..poly.len()).all(|i| {
+                    let (a, c) = (poly[i], poly[(i + 1) % poly.len()]);
+                    (c - a).perp_dot(q - a) >= -1e-9
+                })
+            };
+            for j in 0..n {
+                for i in 0..n {
+                    let d = m.at(i, j);
+                    if !d.is_finite() {
+                        continue;
+                    }
+                    for sj in 0..=4 {
+                        for si in 0..=4 {
+                            let q =
+                                DVec2::new(i as f64 + si as f64 / 4.0, j as f64 + sj as f64 / 4.0);
+                            assert!(
+                                polys.iter().any(|(p, pd)| *pd <= d && inside(p, q)),
+                                "pixel ({i}, {j}) at depth {d}: {q:?} uncovered"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        // A chain of three overlapping squares, the middle one farthest.
+        let mut b = CoverageBuilder::new(16);
+        b.add_convex(&rect(0.0, 0.0, 6.0, 16.0), 1.0);
+        b.add_convex(&rect(5.0, 0.0, 11.0, 16.0), 3.0);
+        b.add_convex(&rect(10.0, 0.0, 16.0, 16.0), 2.0);
+        let m = b.finish();
+        assert_eq!(m.covered(), 256);
+        assert_eq!((m.at(0, 3), m.at(7, 3), m.at(15, 3)), (1.0, 3.0, 2.0));
+    }
+
     #[test]
     fn pyramid_range_queries() {
         let mut b = CoverageBuilder::new(16);

@@ -478,3 +478,68 @@ impl VisibilityMethod for ExtProj {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sightline_geom::Polygon;
+    use sightline_scene::Object;
+
+    fn block(x0: f64, y0: f64, x1: f64, y1: f64, h: f64) -> Object {
+        Object::block(
+            None,
+            Polygon::rect(DVec2::new(x0, y0), DVec2::new(x1, y1)),
+            0.0,
+            h,
+        )
+    }
+
+    #[test]
+    fn frustum_of_a_direction() {
+        let lc = Direction::PosX.box_to_local(DVec3::ZERO, DVec3::new(10.0, 10.0, 2.0));
+        let b = |u0: f64, u1: f64| LocalBox {
+            min: DVec3::new(20.0, u0, 0.0),
+            max: DVec3::new(30.0, u1, 10.0),
+        };
+        // At depth 30 the frustum spans 5 ± 1.5 × (5 + 30) in u.
+        assert!(in_frustum(&lc, &b(50.0, 57.0), 1.5));
+        assert!(!in_frustum(&lc, &b(58.0, 70.0), 1.5));
+        assert!(!in_frustum(&lc, &b(-70.0, -48.0), 1.5));
+    }
+
+    /// A deep cell facing a street front with a gap and a wall behind it: the planes
+    /// kept in +y are those that hide occludees (none between the cell and the street
+    /// front, where nothing can be hidden), the building behind the wall is culled, and
+    /// no plane is kept in -y, where there is nothing to hide.
+    #[test]
+    fn planes_are_chosen_by_the_occludees_they_hide() {
+        let scene = Arc::new(Scene::from_objects(vec![
+            block(-60.0, 12.0, 18.0, 30.0, 10.0), // 0 street front, left of the gap
+            block(22.0, 12.0, 100.0, 30.0, 10.0), // 1 street front, right of the gap
+            block(-200.0, 40.0, 240.0, 45.0, 20.0), // 2 solid wall behind
+            block(15.0, 60.0, 25.0, 70.0, 8.0),   // 3 behind the wall
+        ]));
+        let params = Params {
+            adaptive_budget: None,
+            ..Params::default()
+        };
+        let ext = ExtProj::new(scene.clone(), params);
+        let c = ViewCell::new(DVec3::new(0.0, -30.0, 1.5), DVec3::new(40.0, 10.0, 2.0)).unwrap();
+        let all: Vec<u32> = (0..4).collect();
+        let maps = ext.plane_maps_for(&c, &all);
+        let py: Vec<&PlaneMap> = maps
+            .iter()
+            .filter(|m| m.plane.dir == Direction::PosY)
+            .collect();
+        assert!(!py.is_empty());
+        assert!(
+            py.iter().all(|m| m.plane.x > 12.0),
+            "{:?}",
+            py.iter().map(|m| m.plane.x).collect::<Vec<_>>()
+        );
+        let pvs = ext.pvs_among(&c, &all);
+        assert_eq!(pvs, vec![0, 1, 2]);
+        // Nothing to hide in -y: no plane is kept there.
+        assert!(maps.iter().all(|m| m.plane.dir != Direction::NegY));
+    }
+}
