@@ -146,6 +146,9 @@ pub struct ExtProj {
     pub occluders: OccluderSet,
     /// Occludee boxes per object (outer prisms' boxes, or the bounds).
     boxes: Vec<Vec<Aabb3>>,
+    /// Per object, the vertices of each outer prism (parallel to `boxes`; the box's
+    /// corners when the object has no outer prism).
+    hulls: Vec<Vec<Vec<DVec3>>>,
 }
 
 /// Prepare `ext-proj` for `scene`.
@@ -171,6 +174,41 @@ impl PlaneMap {
     /// Whether the occludee box (world) is hidden on this plane.
     pub fn hides(&self, b: &Aabb3, improved: bool) -> bool {
         self.hides_local(&self.plane.dir.box_to_local(b.min, b.max), improved)
+    }
+
+    /// Whether the convex hull of the occludee points (world) is hidden on this plane:
+    /// the bounding rectangle of its Projection (§3.1) spans the views of its vertices
+    /// from the cell's corners — for a fixed viewpoint the view is a linear-fractional
+    /// map, extreme at the hull's vertices; for a fixed point it is monotone in each
+    /// coordinate of the viewpoint, extreme at the cell's corners. Tighter than the
+    /// box for a rotated building; its extended depth is its nearest vertex's.
+    pub fn hides_points(&self, points: &[DVec3]) -> bool {
+        let x = self.plane.x;
+        let mut lo = DVec2::splat(f64::INFINITY);
+        let mut hi = DVec2::splat(f64::NEG_INFINITY);
+        let mut near = f64::INFINITY;
+        let corners = self.cell.corners();
+        for p in points {
+            let p = self.plane.dir.to_local(*p);
+            if !(p.x > self.cell.max.x) {
+                return false;
+            }
+            near = near.min(p.x);
+            for e in &corners {
+                let q = planes::view(*e, p, x);
+                lo = lo.min(q);
+                hi = hi.max(q);
+            }
+        }
+        if points.is_empty() {
+            return false;
+        }
+        let (a, b) = (self.plane.to_px(lo), self.plane.to_px(hi));
+        let Some(r) = pixel_range(a, b, self.map.n) else {
+            return false;
+        };
+        self.map
+            .all_below(r[0], r[1], r[2], r[3], depth_down(near - x))
     }
 
     /// Whether the occludee box (in this plane's local frame) is hidden on this plane.
@@ -201,28 +239,35 @@ pub struct LocalPiece {
 impl ExtProj {
     pub fn new(scene: Arc<Scene>, params: Params) -> Self {
         let occluders = OccluderSet::build(&scene, params.solid_angle);
-        let boxes = scene
-            .objects
-            .iter()
-            .map(|o| {
-                let v: Vec<Aabb3> = o
-                    .outer
-                    .iter()
-                    .map(|p| p.aabb())
-                    .filter(|b| !b.is_empty())
-                    .collect();
-                if v.is_empty() {
-                    vec![o.bounds]
-                } else {
-                    v
-                }
-            })
-            .collect();
+        let mut boxes = Vec::with_capacity(scene.objects.len());
+        let mut hulls = Vec::with_capacity(scene.objects.len());
+        for o in &scene.objects {
+            let (b, h): (Vec<Aabb3>, Vec<Vec<DVec3>>) = o
+                .outer
+                .iter()
+                .filter(|p| !p.aabb().is_empty())
+                .map(|p| {
+                    let v: Vec<DVec3> = [p.base, p.top]
+                        .iter()
+                        .flat_map(|&z| p.footprint.exterior.iter().map(move |q| q.extend(z)))
+                        .collect();
+                    (p.aabb(), v)
+                })
+                .unzip();
+            if b.is_empty() {
+                boxes.push(vec![o.bounds]);
+                hulls.push(vec![o.bounds.corners().to_vec()]);
+            } else {
+                boxes.push(b);
+                hulls.push(h);
+            }
+        }
         ExtProj {
             scene,
             params,
             occluders,
             boxes,
+            hulls,
         }
     }
 
@@ -432,9 +477,11 @@ impl ExtProj {
             .iter()
             .copied()
             .filter(|&id| {
-                !self.boxes[id as usize]
-                    .iter()
-                    .all(|b| self.box_hidden(b, &maps, &extra, self.params.occludee_splits))
+                let (boxes, hulls) = (&self.boxes[id as usize], &self.hulls[id as usize]);
+                !boxes.iter().zip(hulls).all(|(b, h)| {
+                    maps.iter().any(|m| m.hides_points(h))
+                        || self.box_hidden(b, &maps, &extra, self.params.occludee_splits)
+                })
             })
             .collect()
     }
@@ -541,5 +588,40 @@ mod tests {
         assert_eq!(pvs, vec![0, 1, 2]);
         // Nothing to hide in -y: no plane is kept there.
         assert!(maps.iter().all(|m| m.plane.dir != Direction::NegY));
+        // The hull test on a box's corners is the plain box test (same rectangle).
+        let mut agree = 0;
+        for m in &maps {
+            for o in &scene.objects {
+                let b = o.bounds;
+                let local = m.plane.dir.box_to_local(b.min, b.max);
+                assert_eq!(m.hides_points(&b.corners()), m.hides_local(&local, false));
+                agree += m.hides_local(&local, false) as usize;
+            }
+        }
+        assert!(agree > 0);
+    }
+
+    /// A building rotated by 45° behind a wall is hidden by the test of its hull.
+    #[test]
+    fn rotated_occludee_is_tested_by_its_hull() {
+        let diamond = Polygon::new(
+            vec![
+                DVec2::new(10.0, 60.0),
+                DVec2::new(20.0, 50.0),
+                DVec2::new(30.0, 60.0),
+                DVec2::new(20.0, 70.0),
+            ],
+            vec![],
+        );
+        let scene = Arc::new(Scene::from_objects(vec![
+            block(-200.0, 40.0, 240.0, 45.0, 12.0),
+            Object::block(None, diamond, 0.0, 13.0),
+        ]));
+        let ext = ExtProj::new(scene.clone(), Params::default());
+        let c = ViewCell::new(DVec3::new(15.0, 20.0, 1.5), DVec3::new(25.0, 30.0, 2.0)).unwrap();
+        let maps = ext.plane_maps_for(&c, &[0, 1]);
+        let h = &ext.hulls[1][0];
+        assert!(maps.iter().any(|m| m.hides_points(h)));
+        assert_eq!(ext.pvs_among(&c, &[0, 1]), vec![0]);
     }
 }
