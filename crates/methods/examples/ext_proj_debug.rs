@@ -7,7 +7,7 @@
 //! plane positions, the covered fraction and the number of occludees hidden per plane.
 //!
 //! `ext_proj_debug SCENE CELLS.json` instead prints the mean PVS and the median time
-//! per cell of a cells.json. Environment overrides of the parameters: EXTPROJ_MAXOCC,
+//! per cell of a cells.json. Environment overrides of the parameters: EXTPROJ_RES, EXTPROJ_MAXOCC,
 //! EXTPROJ_CANDS, EXTPROJ_PPD, EXTPROJ_SPLITS, EXTPROJ_IMPROVED (0/1), EXTPROJ_BUDGET,
 //! EXTPROJ_MINM; EXTPROJ_AT, EXTPROJ_OBJ and EXTPROJ_PT select planes, report on one
 //! object, or list the pieces covering one plane point (see the code).
@@ -36,6 +36,9 @@ fn main() {
     }
     if let Some(m) = env("EXTPROJ_SPLITS") {
         params.occludee_splits = m as u32;
+    }
+    if let Some(m) = env("EXTPROJ_RES") {
+        params.resolution_px = m.clamp(8, 4096).next_power_of_two();
     }
     if let Some(m) = env("EXTPROJ_IMPROVED") {
         params.improved = m != 0;
