@@ -23,7 +23,8 @@
 //!    previous occlusion map re-projected (eroded by the inverse image of the
 //!    equivalent planar cell) and new occluders — including every mesh triangle, the
 //!    leaves of a forest — added at each plane;
-//! 6. optionally the adaptive subdivision of §6.1 ([`adaptive`]).
+//! 6. the adaptive subdivision of §6.1 ([`adaptive`]); by default (budget 0, minimum
+//!    25 m) it splits only cells wider than 50 m, down to 25 m.
 //!
 //! Parameters: `resolution_px` (default 256, rounded up to a power of two as the
 //! pyramid needs, §7.1), `sweep`, `planes` (number of sweep planes per direction,
@@ -43,7 +44,7 @@ use depth_map::{depth_down, depth_up, pixel_range, CoverageBuilder, DepthMap};
 use occludee::occludee_projection;
 use occluders::OccluderSet;
 use planes::{candidate_positions, Direction, LocalBox, Plane, PLANE_EXTENSION};
-use projection::{extended_projection, polygon_area, FACE_CLEARANCE_M};
+use projection::{plane_safe_projections, FACE_CLEARANCE_M};
 use sightline_geom::{Aabb3, DVec2, DVec3, ViewCell};
 use sightline_scene::Scene;
 use std::sync::Arc;
@@ -77,6 +78,7 @@ pub struct Params {
     /// Adaptive subdivision (§6.1): split a cell while its PVS has more objects than
     /// this (None = off), down to `adaptive_min_m`.
     pub adaptive_budget: Option<usize>,
+    /// A cell is not split when its halves would be narrower than this (m).
     pub adaptive_min_m: f64,
 }
 
@@ -90,12 +92,15 @@ impl Default for Params {
             sweep_planes: 15,
             kernel_px: 5,
             solid_angle: 0.002,
-            max_occluders: 600,
-            plane_candidates: 16,
-            planes_per_direction: 2,
-            occludee_splits: 2,
-            adaptive_budget: None,
-            adaptive_min_m: 5.0,
+            max_occluders: 3000,
+            plane_candidates: 12,
+            planes_per_direction: 3,
+            occludee_splits: 3,
+            // By default every cell wider than 50 m is split down to halves of at least
+            // 25 m: a deep cell's occludee Projections (which contain the cell's
+            // cross-section) are too large for street fronts with gaps to cover.
+            adaptive_budget: Some(0),
+            adaptive_min_m: 25.0,
         }
     }
 }
@@ -114,6 +119,26 @@ impl Params {
     }
 }
 
+/// Resolution (pixels per side) of the depth maps on which candidate planes are scored.
+pub const SCORING_PX: usize = 128;
+
+/// Candidate planes are scored with at most this many occluder pieces (the largest).
+pub const SCORING_PIECES: usize = 1500;
+
+/// Candidate planes just inside an occluder's near face lie this far behind it (m).
+pub const SLICE_INSET_M: f64 = 0.25;
+
+/// Whether the local box `b` meets the frustum of the planes of a direction: the
+/// cell's cross-section grown by the distance from its near face and scaled by
+/// `extension` about its centre, as [`Plane::new`] does, at `b`'s far depth.
+fn in_frustum(lc: &LocalBox, b: &LocalBox, extension: f64) -> bool {
+    let grow = (b.max.x - lc.min.x).max(0.0);
+    let (cu, cv) = (0.5 * (lc.min.y + lc.max.y), 0.5 * (lc.min.z + lc.max.z));
+    let hu = (0.5 * (lc.max.y - lc.min.y) + grow) * extension;
+    let hv = (0.5 * (lc.max.z - lc.min.z) + grow) * extension;
+    b.max.y >= cu - hu && b.min.y <= cu + hu && b.max.z >= cv - hv && b.min.z <= cv + hv
+}
+
 /// `ext-proj` prepared for a scene.
 pub struct ExtProj {
     pub scene: Arc<Scene>,
@@ -121,6 +146,9 @@ pub struct ExtProj {
     pub occluders: OccluderSet,
     /// Occludee boxes per object (outer prisms' boxes, or the bounds).
     boxes: Vec<Vec<Aabb3>>,
+    /// Per object, the vertices of each outer prism (parallel to `boxes`; the box's
+    /// corners when the object has no outer prism).
+    hulls: Vec<Vec<Vec<DVec3>>>,
 }
 
 /// Prepare `ext-proj` for `scene`.
@@ -145,8 +173,47 @@ pub struct PlaneMap {
 impl PlaneMap {
     /// Whether the occludee box (world) is hidden on this plane.
     pub fn hides(&self, b: &Aabb3, improved: bool) -> bool {
-        let occ = self.plane.dir.box_to_local(b.min, b.max);
-        let Some((rect, depth)) = occludee_projection(&self.cell, &occ, self.plane.x, improved)
+        self.hides_local(&self.plane.dir.box_to_local(b.min, b.max), improved)
+    }
+
+    /// Whether the convex hull of the occludee points (world) is hidden on this plane:
+    /// the bounding rectangle of its Projection (§3.1) spans the views of its vertices
+    /// from the cell's corners — for a fixed viewpoint the view is a linear-fractional
+    /// map, extreme at the hull's vertices; for a fixed point it is monotone in each
+    /// coordinate of the viewpoint, extreme at the cell's corners. Tighter than the
+    /// box for a rotated building; its extended depth is its nearest vertex's.
+    pub fn hides_points(&self, points: &[DVec3]) -> bool {
+        let x = self.plane.x;
+        let mut lo = DVec2::splat(f64::INFINITY);
+        let mut hi = DVec2::splat(f64::NEG_INFINITY);
+        let mut near = f64::INFINITY;
+        let corners = self.cell.corners();
+        for p in points {
+            let p = self.plane.dir.to_local(*p);
+            if !(p.x > self.cell.max.x) {
+                return false;
+            }
+            near = near.min(p.x);
+            for e in &corners {
+                let q = planes::view(*e, p, x);
+                lo = lo.min(q);
+                hi = hi.max(q);
+            }
+        }
+        if points.is_empty() {
+            return false;
+        }
+        let (a, b) = (self.plane.to_px(lo), self.plane.to_px(hi));
+        let Some(r) = pixel_range(a, b, self.map.n) else {
+            return false;
+        };
+        self.map
+            .all_below(r[0], r[1], r[2], r[3], depth_down(near - x))
+    }
+
+    /// Whether the occludee box (in this plane's local frame) is hidden on this plane.
+    pub fn hides_local(&self, occ: &LocalBox, improved: bool) -> bool {
+        let Some((rect, depth)) = occludee_projection(&self.cell, occ, self.plane.x, improved)
         else {
             return false;
         };
@@ -160,7 +227,7 @@ impl PlaneMap {
 }
 
 /// A convex occluder piece in one direction's local frame.
-pub(crate) struct LocalPiece {
+pub struct LocalPiece {
     pub index: u32,
     pub vertices: Vec<DVec3>,
     pub near: f64,
@@ -172,46 +239,50 @@ pub(crate) struct LocalPiece {
 impl ExtProj {
     pub fn new(scene: Arc<Scene>, params: Params) -> Self {
         let occluders = OccluderSet::build(&scene, params.solid_angle);
-        let boxes = scene
-            .objects
-            .iter()
-            .map(|o| {
-                let v: Vec<Aabb3> = o
-                    .outer
-                    .iter()
-                    .map(|p| p.aabb())
-                    .filter(|b| !b.is_empty())
-                    .collect();
-                if v.is_empty() {
-                    vec![o.bounds]
-                } else {
-                    v
-                }
-            })
-            .collect();
+        let mut boxes = Vec::with_capacity(scene.objects.len());
+        let mut hulls = Vec::with_capacity(scene.objects.len());
+        for o in &scene.objects {
+            let (b, h): (Vec<Aabb3>, Vec<Vec<DVec3>>) = o
+                .outer
+                .iter()
+                .filter(|p| !p.aabb().is_empty())
+                .map(|p| {
+                    let v: Vec<DVec3> = [p.base, p.top]
+                        .iter()
+                        .flat_map(|&z| p.footprint.exterior.iter().map(move |q| q.extend(z)))
+                        .collect();
+                    (p.aabb(), v)
+                })
+                .unzip();
+            if b.is_empty() {
+                boxes.push(vec![o.bounds]);
+                hulls.push(vec![o.bounds.corners().to_vec()]);
+            } else {
+                boxes.push(b);
+                hulls.push(h);
+            }
+        }
         ExtProj {
             scene,
             params,
             occluders,
             boxes,
+            hulls,
         }
     }
 
     /// The occluder pieces relevant to `cell` in direction `dir`, clipped beyond the
-    /// cell's far face, largest solid angle first, at most `max_occluders`.
-    pub(crate) fn local_pieces(
-        &self,
-        cell: &ViewCell,
-        dir: Direction,
-        ids: &[u32],
-    ) -> Vec<LocalPiece> {
+    /// cell's far face, largest solid angle first, at most `max_occluders`. Pieces
+    /// outside the direction's extended frustum are left to the other directions: their
+    /// Projections fall outside this direction's planes.
+    pub fn local_pieces(&self, cell: &ViewCell, dir: Direction, ids: &[u32]) -> Vec<LocalPiece> {
         let lc = dir.box_to_local(cell.min, cell.max);
         let w_min = lc.max.x + FACE_CLEARANCE_M;
         let mut out: Vec<LocalPiece> = Vec::new();
         for &i in ids {
             let piece = &self.occluders.pieces[i as usize];
             let lb = dir.box_to_local(piece.bounds.min, piece.bounds.max);
-            if lb.max.x <= w_min {
+            if lb.max.x <= w_min || !in_frustum(&lc, &lb, self.params.extension) {
                 continue;
             }
             let vertices = piece.occluder.local_vertices(dir, w_min);
@@ -237,69 +308,74 @@ impl ExtProj {
         out
     }
 
-    /// §6.1 "Choice of the projection plane": a candidate plane just behind each
-    /// occluder, scored by the fraction of its pixels the Projections and slices fill.
-    /// The best `planes_per_direction` candidates are kept, each at least 1.5× nearer
-    /// or farther (from the cell's face) than those already kept: a near plane
-    /// captures slices of the nearby blocks, a far one the umbra of whole rows.
-    pub(crate) fn choose_planes(
+    /// §6.1 "Choice of the projection plane": candidate planes just behind each
+    /// occluder (the paper) and just inside its near face (a slice of the whole
+    /// street front, §3.3), at most `plane_candidates` of them. The paper scores a
+    /// candidate by the pixels its Projections fill; that favours planes hugging the
+    /// cell, whose few filled pixels are useless as soon as one gap faces the cell
+    /// (every occludee's Projection then contains the cell's cross-section). We score
+    /// each candidate by what the filled pixels are for: the occludee boxes it hides,
+    /// on a depth map at reduced resolution drawn with the largest pieces. The planes are then kept greedily, each
+    /// maximizing the boxes not hidden by the planes kept before it (at most
+    /// `planes_per_direction`; none when no candidate hides anything).
+    pub fn choose_planes(
         &self,
         dir: Direction,
         lc: &LocalBox,
         pieces: &[LocalPiece],
+        occludees: &[LocalBox],
     ) -> Vec<f64> {
-        let scoring: Vec<&LocalPiece> = pieces.iter().take(48).collect();
-        let fars: Vec<f64> = scoring.iter().map(|p| p.far + 1e-3).collect();
-        let cands = candidate_positions(&fars, self.params.plane_candidates);
-        let mut scored: Vec<(f64, f64)> = Vec::new();
-        for x in cands {
-            let plane = Plane::new(dir, lc, x, self.params.resolution_px, self.params.extension);
-            let mut filled = 0.0;
-            for p in &scoring {
-                if let Some((poly, _)) = extended_projection(&p.vertices, lc, x) {
-                    filled += polygon_area(&poly).abs();
-                }
-                if p.near < x && x < p.far {
-                    if let Some(s) = self.occluders.pieces[p.index as usize]
-                        .occluder
-                        .slice(dir, x)
-                    {
-                        filled += polygon_area(&s).abs();
-                    }
-                }
-            }
-            let score = filled / plane.rect.size().x / plane.rect.size().y;
-            if score > 0.0 {
-                scored.push((x, score));
-            }
+        let occludees: Vec<&LocalBox> = occludees.iter().filter(|o| o.min.x > lc.max.x).collect();
+        if occludees.is_empty() || pieces.is_empty() {
+            return vec![];
         }
-        scored.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.total_cmp(&b.0)));
+        let mut depths: Vec<f64> = pieces.iter().map(|p| p.far + 1e-3).collect();
+        depths.extend(pieces.iter().map(|p| p.near + SLICE_INSET_M));
+        let cands = candidate_positions(&depths, self.params.plane_candidates);
+        let n = self.params.resolution_px.min(SCORING_PX);
+        let hidden: Vec<(f64, Vec<bool>)> = cands
+            .into_iter()
+            .filter(|&x| x > lc.max.x)
+            .map(|x| {
+                let plane = Plane::new(dir, lc, x, n, self.params.extension);
+                let pm = PlaneMap {
+                    plane,
+                    cell: *lc,
+                    map: self.depth_map(&plane, lc, &pieces[..pieces.len().min(SCORING_PIECES)]),
+                };
+                let h = occludees
+                    .iter()
+                    .map(|o| pm.hides_local(o, self.params.improved))
+                    .collect();
+                (x, h)
+            })
+            .collect();
+        let mut done = vec![false; occludees.len()];
         let mut kept: Vec<f64> = Vec::new();
-        for (x, _) in scored {
-            if kept.len() >= self.params.planes_per_direction {
+        while kept.len() < self.params.planes_per_direction {
+            let gain = |h: &[bool]| h.iter().zip(&done).filter(|(h, d)| **h && !**d).count();
+            let best = hidden
+                .iter()
+                .filter(|(x, _)| !kept.contains(x))
+                .map(|(x, h)| (gain(h), *x, h))
+                .max_by(|a, b| a.0.cmp(&b.0).then(b.1.total_cmp(&a.1)));
+            let Some((g, x, h)) = best else { break };
+            if g == 0 {
                 break;
             }
-            let d = x - lc.max.x;
-            if kept.iter().all(|k| {
-                let dk = k - lc.max.x;
-                d > 1.5 * dk || dk > 1.5 * d
-            }) {
-                kept.push(x);
+            kept.push(x);
+            for (d, h) in done.iter_mut().zip(h) {
+                *d |= *h;
             }
         }
         kept
     }
 
     /// Draw the Projections (and slices) of `pieces` on `plane` into a depth map.
-    pub(crate) fn depth_map(
-        &self,
-        plane: &Plane,
-        lc: &LocalBox,
-        pieces: &[LocalPiece],
-    ) -> DepthMap {
+    pub fn depth_map(&self, plane: &Plane, lc: &LocalBox, pieces: &[LocalPiece]) -> DepthMap {
         let mut b = CoverageBuilder::new(plane.n);
         for p in pieces {
-            if let Some((poly, depth)) = extended_projection(&p.vertices, lc, plane.x) {
+            for (poly, depth) in plane_safe_projections(&p.vertices, lc, plane.x) {
                 let px: Vec<DVec2> = poly.iter().map(|q| plane.to_px(*q)).collect();
                 b.add_convex(&px, depth_up(depth));
             }
@@ -316,8 +392,15 @@ impl ExtProj {
         b.finish()
     }
 
-    /// The six (or fewer) depth-mapped planes of `cell` (§6.1).
+    /// The depth-mapped planes of `cell` (§6.1), chosen for all the scene's objects.
     pub fn plane_maps(&self, cell: &ViewCell) -> Vec<PlaneMap> {
+        let all: Vec<u32> = (0..self.scene.objects.len() as u32).collect();
+        self.plane_maps_for(cell, &all)
+    }
+
+    /// The depth-mapped planes of `cell` (§6.1), chosen to hide the occludees of
+    /// `candidates` (object ids).
+    pub fn plane_maps_for(&self, cell: &ViewCell, candidates: &[u32]) -> Vec<PlaneMap> {
         let ids = self.occluders.relevant(&cell.aabb());
         let mut maps = Vec::new();
         for dir in Direction::ALL {
@@ -326,7 +409,12 @@ impl ExtProj {
             if pieces.is_empty() {
                 continue;
             }
-            for x in self.choose_planes(dir, &lc, &pieces) {
+            let occludees: Vec<LocalBox> = candidates
+                .iter()
+                .flat_map(|&id| self.boxes[id as usize].iter())
+                .map(|b| dir.box_to_local(b.min, b.max))
+                .collect();
+            for x in self.choose_planes(dir, &lc, &pieces, &occludees) {
                 let plane = Plane::new(
                     dir,
                     &lc,
@@ -378,7 +466,7 @@ impl ExtProj {
 
     /// PVS of `cell` restricted to `candidates` (sorted object ids).
     pub fn pvs_among(&self, cell: &ViewCell, candidates: &[u32]) -> Vec<u32> {
-        let maps = self.plane_maps(cell);
+        let maps = self.plane_maps_for(cell, candidates);
         let sweep = if self.params.sweep {
             sweep::Sweep::run(self, cell)
         } else {
@@ -389,9 +477,11 @@ impl ExtProj {
             .iter()
             .copied()
             .filter(|&id| {
-                !self.boxes[id as usize]
-                    .iter()
-                    .all(|b| self.box_hidden(b, &maps, &extra, self.params.occludee_splits))
+                let (boxes, hulls) = (&self.boxes[id as usize], &self.hulls[id as usize]);
+                !boxes.iter().zip(hulls).all(|(b, h)| {
+                    maps.iter().any(|m| m.hides_points(h))
+                        || self.box_hidden(b, &maps, &extra, self.params.occludee_splits)
+                })
             })
             .collect()
     }
@@ -433,5 +523,105 @@ impl VisibilityMethod for ExtProj {
             Some(budget) => adaptive::pvs(self, cell, &all, budget),
             None => self.pvs_among(cell, &all),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sightline_geom::Polygon;
+    use sightline_scene::Object;
+
+    fn block(x0: f64, y0: f64, x1: f64, y1: f64, h: f64) -> Object {
+        Object::block(
+            None,
+            Polygon::rect(DVec2::new(x0, y0), DVec2::new(x1, y1)),
+            0.0,
+            h,
+        )
+    }
+
+    #[test]
+    fn frustum_of_a_direction() {
+        let lc = Direction::PosX.box_to_local(DVec3::ZERO, DVec3::new(10.0, 10.0, 2.0));
+        let b = |u0: f64, u1: f64| LocalBox {
+            min: DVec3::new(20.0, u0, 0.0),
+            max: DVec3::new(30.0, u1, 10.0),
+        };
+        // At depth 30 the frustum spans 5 ± 1.5 × (5 + 30) in u.
+        assert!(in_frustum(&lc, &b(50.0, 57.0), 1.5));
+        assert!(!in_frustum(&lc, &b(58.0, 70.0), 1.5));
+        assert!(!in_frustum(&lc, &b(-70.0, -48.0), 1.5));
+    }
+
+    /// A deep cell facing a street front with a gap and a wall behind it: the planes
+    /// kept in +y are those that hide occludees (none between the cell and the street
+    /// front, where nothing can be hidden), the building behind the wall is culled, and
+    /// no plane is kept in -y, where there is nothing to hide.
+    #[test]
+    fn planes_are_chosen_by_the_occludees_they_hide() {
+        let scene = Arc::new(Scene::from_objects(vec![
+            block(-60.0, 12.0, 18.0, 30.0, 10.0), // 0 street front, left of the gap
+            block(22.0, 12.0, 100.0, 30.0, 10.0), // 1 street front, right of the gap
+            block(-200.0, 40.0, 240.0, 45.0, 20.0), // 2 solid wall behind
+            block(15.0, 60.0, 25.0, 70.0, 8.0),   // 3 behind the wall
+        ]));
+        let params = Params {
+            adaptive_budget: None,
+            ..Params::default()
+        };
+        let ext = ExtProj::new(scene.clone(), params);
+        let c = ViewCell::new(DVec3::new(0.0, -30.0, 1.5), DVec3::new(40.0, 10.0, 2.0)).unwrap();
+        let all: Vec<u32> = (0..4).collect();
+        let maps = ext.plane_maps_for(&c, &all);
+        let py: Vec<&PlaneMap> = maps
+            .iter()
+            .filter(|m| m.plane.dir == Direction::PosY)
+            .collect();
+        assert!(!py.is_empty());
+        assert!(
+            py.iter().all(|m| m.plane.x > 12.0),
+            "{:?}",
+            py.iter().map(|m| m.plane.x).collect::<Vec<_>>()
+        );
+        let pvs = ext.pvs_among(&c, &all);
+        assert_eq!(pvs, vec![0, 1, 2]);
+        // Nothing to hide in -y: no plane is kept there.
+        assert!(maps.iter().all(|m| m.plane.dir != Direction::NegY));
+        // The hull test on a box's corners is the plain box test (same rectangle).
+        let mut agree = 0;
+        for m in &maps {
+            for o in &scene.objects {
+                let b = o.bounds;
+                let local = m.plane.dir.box_to_local(b.min, b.max);
+                assert_eq!(m.hides_points(&b.corners()), m.hides_local(&local, false));
+                agree += m.hides_local(&local, false) as usize;
+            }
+        }
+        assert!(agree > 0);
+    }
+
+    /// A building rotated by 45° behind a wall is hidden by the test of its hull.
+    #[test]
+    fn rotated_occludee_is_tested_by_its_hull() {
+        let diamond = Polygon::new(
+            vec![
+                DVec2::new(10.0, 60.0),
+                DVec2::new(20.0, 50.0),
+                DVec2::new(30.0, 60.0),
+                DVec2::new(20.0, 70.0),
+            ],
+            vec![],
+        );
+        let scene = Arc::new(Scene::from_objects(vec![
+            block(-200.0, 40.0, 240.0, 45.0, 12.0),
+            Object::block(None, diamond, 0.0, 13.0),
+        ]));
+        let ext = ExtProj::new(scene.clone(), Params::default());
+        let c = ViewCell::new(DVec3::new(15.0, 20.0, 1.5), DVec3::new(25.0, 30.0, 2.0)).unwrap();
+        let maps = ext.plane_maps_for(&c, &[0, 1]);
+        let h = &ext.hulls[1][0];
+        assert!(maps.iter().any(|m| m.hides_points(h)));
+        assert_eq!(ext.pvs_among(&c, &[0, 1]), vec![0]);
     }
 }

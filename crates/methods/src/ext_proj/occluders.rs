@@ -30,7 +30,7 @@ const GROUND_M: f64 = 0.0;
 
 /// At most this many height levels are fused (levels are chosen among the distinct
 /// heights; each building counts at the highest level not above its top).
-const MAX_LEVELS: usize = 24;
+const MAX_LEVELS: usize = 8;
 
 /// One convex occluder with its bounds and the approximate area it presents.
 #[derive(Clone, Debug)]

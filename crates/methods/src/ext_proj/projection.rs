@@ -141,7 +141,8 @@ impl ConvexOccluder {
 
 /// The extended projection of a convex occluder given by its local vertices onto the
 /// plane `w = x`: the intersection of its views from the cell's vertices (§3.2), with
-/// its extended depth bound (farthest depth minus `x`). `None` when void.
+/// its extended depth bound (farthest depth minus `x`). `None` when void. Valid only
+/// for an occluder on one side of the plane (see [`plane_safe_projections`]).
 pub fn extended_projection(
     vertices: &[DVec3],
     cell: &LocalBox,
@@ -175,6 +176,59 @@ pub fn extended_projection(
         });
     }
     acc.map(|p| (p, far - x))
+}
+
+/// The Projections of a convex occluder onto `w = x` that are valid from the whole
+/// cell: the occluder's own when it lies on one side of the plane, otherwise those of
+/// its parts in front of and behind the plane (each convex, on one side).
+///
+/// The intersection of the views from the cell's vertices is contained in the view
+/// from every point of the cell only when the occluder lies on one side of the plane:
+/// for an occluder crossing it, the viewpoints from which a plane point `q` is
+/// covered form two cones (through the front part, and through the back part beyond
+/// `q`), and a viewpoint between them — a sight line grazing the occluder's side —
+/// sees `q` uncovered although every vertex of the cell has it covered. The parts
+/// are subsets of the occluder, so their Projections stay conservative; the slice
+/// (drawn separately) joins them.
+pub fn plane_safe_projections(
+    vertices: &[DVec3],
+    cell: &LocalBox,
+    x: f64,
+) -> Vec<(Vec<DVec2>, f64)> {
+    let (near, far) = vertices
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(p.x), b.max(p.x))
+        });
+    if far <= x || near >= x {
+        return extended_projection(vertices, cell, x).into_iter().collect();
+    }
+    let (front, back) = split_at(vertices, x);
+    [front, back]
+        .iter()
+        .filter_map(|part| extended_projection(part, cell, x))
+        .collect()
+}
+
+/// The vertices of the parts `w ≤ x` and `w ≥ x` of the convex hull of `vertices`:
+/// the vertices on each side plus the plane's intersections with every segment
+/// between two vertices (a superset of the hull's edges, whose extra points lie
+/// inside the hull, so each part's hull is exact).
+pub fn split_at(vertices: &[DVec3], x: f64) -> (Vec<DVec3>, Vec<DVec3>) {
+    let mut front: Vec<DVec3> = vertices.iter().copied().filter(|p| p.x <= x).collect();
+    let mut back: Vec<DVec3> = vertices.iter().copied().filter(|p| p.x >= x).collect();
+    for (i, a) in vertices.iter().enumerate() {
+        for b in &vertices[i + 1..] {
+            if (a.x < x && b.x > x) || (a.x > x && b.x < x) {
+                let t = (x - a.x) / (b.x - a.x);
+                let mut q = *a + (*b - *a) * t;
+                q.x = x;
+                front.push(q);
+                back.push(q);
+            }
+        }
+    }
+    (front, back)
 }
 
 /// Area of the intersection of two convex polygons' bounding ranges is not needed;
@@ -337,6 +391,66 @@ mod tests {
         };
         let v = small.local_vertices(dir, cell.max.x + FACE_CLEARANCE_M);
         assert!(extended_projection(&v, &cell, 20.0).is_none());
+    }
+
+    fn contains(poly: &[DVec2], q: DVec2) -> bool {
+        (0..poly.len()).all(|i| (poly[(i + 1) % poly.len()] - poly[i]).perp_dot(q - poly[i]) >= 0.0)
+    }
+
+    /// The demo city's witness (cell 50..100 × 200..250, +y): a sight line from
+    /// (84.03, 239.58, 1.73) grazes the right side of a block that crosses the plane
+    /// y = 302.61. Every vertex of the cell sees the plane point (91.05, 1.115)
+    /// covered, through the block's front part or through its back part, but that
+    /// viewpoint sees it uncovered; the split Projections must leave it out.
+    #[test]
+    fn occluder_crossing_the_plane_is_split() {
+        let block = ConvexOccluder::Prism {
+            footprint: vec![
+                DVec2::new(94.05295287323024, 331.82866543997267),
+                DVec2::new(76.8571739168166, 320.6184172168177),
+                DVec2::new(69.28879563931282, 277.4786610350459),
+                DVec2::new(82.7562043586291, 267.43633896648885),
+            ],
+            base: 0.0,
+            top: 13.0,
+        };
+        let dir = Direction::PosY;
+        let cell = dir.box_to_local(DVec3::new(50.0, 200.0, 1.5), DVec3::new(100.0, 250.0, 2.0));
+        let v = block.local_vertices(dir, cell.max.x + FACE_CLEARANCE_M);
+        let (x, q) = (302.61, DVec2::new(91.05, 1.115));
+        let (whole, _) = extended_projection(&v, &cell, x).unwrap();
+        assert!(
+            contains(&whole, q),
+            "the unsplit Projection covers the point"
+        );
+        // The witness viewpoint's view does not contain it.
+        let e = dir.to_local(DVec3::new(84.031, 239.576, 1.727));
+        let mut pts: Vec<DVec2> = v.iter().map(|p| view(e, *p, x)).collect();
+        assert!(!contains(&convex_hull(&mut pts), q));
+        let parts = plane_safe_projections(&v, &cell, x);
+        assert!(!parts.is_empty());
+        for (poly, _) in &parts {
+            assert!(!contains(poly, q), "{poly:?}");
+        }
+        // One side of the plane: unchanged.
+        for x in [262.0, 340.0] {
+            let one: Vec<_> = extended_projection(&v, &cell, x).into_iter().collect();
+            assert_eq!(plane_safe_projections(&v, &cell, x), one);
+        }
+    }
+
+    #[test]
+    fn split_parts_are_exact() {
+        let cube: Vec<DVec3> = sightline_geom::Aabb3::new(DVec3::ZERO, DVec3::splat(2.0))
+            .corners()
+            .to_vec();
+        let (f, b) = split_at(&cube, 0.5);
+        assert!(f.iter().all(|p| p.x <= 0.5) && b.iter().all(|p| p.x >= 0.5));
+        assert_eq!(
+            f.iter().filter(|p| p.x == 0.5).count(),
+            b.iter().filter(|p| p.x == 0.5).count()
+        );
+        assert!(f.iter().filter(|p| p.x == 0.5).count() >= 4);
     }
 
     #[test]
