@@ -9,7 +9,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let file = PvsFile::open(&path)?;
     let cells = file.cells().len();
     let objects = file.header().object_count as u64;
-    let ids: u64 = (0..cells).map(|c| file.set_len(c).unwrap_or(0) as u64).sum();
+    let ids: u64 = (0..cells)
+        .map(|c| file.set_len(c).unwrap_or(0) as u64)
+        .sum();
     let (data, total) = file.sizes();
     let per_cell = data as f64 / cells.max(1) as f64;
     let list = ids as f64 * 4.0 / cells.max(1) as f64;
