@@ -267,14 +267,7 @@ pub(crate) fn hidden(scratch: &mut Scratch, resolution: u32) -> bool {
     let iv = &mut scratch.intervals;
     bands.clear();
     lists.clear();
-    let dw = (w_hi - w_lo) / first as f64;
-    for k in (0..first).rev() {
-        let w0 = w_lo + dw * k as f64;
-        let w1 = if k + 1 == first {
-            w_hi
-        } else {
-            w_lo + dw * (k + 1) as f64
-        };
+    for (w0, w1) in super::plane::bands_rev(w_lo, w_hi, first as usize) {
         bands.push(Band {
             w0,
             w1,
@@ -385,14 +378,7 @@ fn hidden_plain(scratch: &mut Scratch, first: u32, resolution: u32) -> bool {
     let (w_lo, w_hi) = (p.w_lo, p.w_hi);
     let bands = &mut scratch.bands;
     bands.clear();
-    let dw = (w_hi - w_lo) / first as f64;
-    for k in (0..first).rev() {
-        let w0 = w_lo + dw * k as f64;
-        let w1 = if k + 1 == first {
-            w_hi
-        } else {
-            w_lo + dw * (k + 1) as f64
-        };
+    for (w0, w1) in super::plane::bands_rev(w_lo, w_hi, first as usize) {
         bands.push((w0, w1, first));
     }
     while let Some((w0, w1, n)) = bands.pop() {

@@ -37,14 +37,7 @@ pub(crate) fn hidden(scratch: &mut Scratch) -> bool {
     }
     let bands = &mut scratch.bands;
     bands.clear();
-    let dw = (w_hi - w_lo) / FIRST_LEVEL as f64;
-    for k in (0..FIRST_LEVEL).rev() {
-        let w0 = w_lo + dw * k as f64;
-        let w1 = if k + 1 == FIRST_LEVEL {
-            w_hi
-        } else {
-            w_lo + dw * (k + 1) as f64
-        };
+    for (w0, w1) in super::plane::bands_rev(w_lo, w_hi, FIRST_LEVEL as usize) {
         bands.push((w0, w1, 0));
     }
     while let Some((w0, w1, depth)) = bands.pop() {

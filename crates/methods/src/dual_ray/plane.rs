@@ -647,6 +647,21 @@ fn cut_slab(
     }
 }
 
+/// The `n` equal bands of `[w_lo, w_hi]`, last band first (the refinement stacks pop the
+/// first band first); the last one ends exactly at `w_hi`.
+pub fn bands_rev(w_lo: f64, w_hi: f64, n: usize) -> impl Iterator<Item = (f64, f64)> {
+    let dw = (w_hi - w_lo) / n as f64;
+    (0..n).rev().map(move |k| {
+        let w0 = w_lo + dw * k as f64;
+        let w1 = if k + 1 == n {
+            w_hi
+        } else {
+            w_lo + dw * (k + 1) as f64
+        };
+        (w0, w1)
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
