@@ -535,6 +535,18 @@ impl Session {
     }
 }
 
+impl Drop for Session {
+    /// A closed session withdraws everything it still waits for: the workers must not
+    /// spend minutes on cells for a client that has gone.
+    fn drop(&mut self) {
+        for (_, (_, tasks)) in self.pending.drain() {
+            for t in tasks {
+                t.abort();
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

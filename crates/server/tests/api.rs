@@ -252,6 +252,47 @@ async fn walk_prefetches_neighbours_and_sends_deltas() {
 }
 
 #[tokio::test]
+async fn a_closed_session_withdraws_what_it_waited_for() {
+    let scene = Arc::new(block_city(6));
+    let src = near_source(scene.clone(), 50.0, 30.0, 100);
+    let config = ServerConfig {
+        cache: sightline_server::cache::CacheConfig {
+            workers: 1,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let s = TestServer::start(scene.clone(), src, config).await;
+    let mut ws = ws_connect(s.addr, "").await;
+    assert_eq!(ws_next(&mut ws).await.unwrap().unwrap()["type"], "welcome");
+    ws_send(
+        &mut ws,
+        json!({"type": "pos", "x": 75.0, "y": 75.0, "z": 1.7, "seq": 0}),
+    )
+    .await;
+    // The ack: the session has queued its 9 cells.
+    while ws_next(&mut ws)
+        .await
+        .unwrap()
+        .map_or(true, |v| v["type"] != "ack")
+    {}
+    drop(ws);
+    let mut cache = serde_json::Value::Null;
+    for _ in 0..100 {
+        let v: serde_json::Value =
+            serde_json::from_slice(&http_get(s.addr, "/api/stats").await.2).unwrap();
+        cache = v["cache"].clone();
+        if cache["cancelled"].as_u64().unwrap() >= 7 && cache["queued"] == 0 {
+            break;
+        }
+        tokio::time::sleep(std::time::Duration::from_millis(50)).await;
+    }
+    assert!(cache["cancelled"].as_u64().unwrap() >= 7, "{cache}");
+    assert!(cache["computed"].as_u64().unwrap() <= 2, "{cache}");
+    s.stop().await.unwrap();
+}
+
+#[tokio::test]
 async fn a_jump_withdraws_the_prefetches_left_behind() {
     // One slow worker: the old neighbourhood's prefetches are still queued at the jump.
     let scene = Arc::new(block_city(6));
