@@ -95,6 +95,7 @@ async function main() {
     if (row + 1 < g.ny) path.push([x1, y + g.cell_size_m]);
 
     const cells = new Set();
+    let best = null; // the step with the largest PVS: the "around" screenshots go there
     let step = 0;
     for (const [x, yy] of path) {
       const r = await page.evaluate(([px, py]) => window.sightline.walkTo(px, py), [x, yy]);
@@ -103,6 +104,7 @@ async function main() {
       assert.deepEqual(r.drawn, truth.visible, `step ${step} at (${x.toFixed(1)}, ${yy.toFixed(1)}): drawn != PVS`);
       const missing = truth.visible.filter((id) => !r.drawn.includes(id));
       assert.equal(missing.length, 0, `missing objects ${missing.slice(0, 10)}`);
+      if (!best || r.drawn.length > best.n) best = { x, y: yy, n: r.drawn.length };
       if (!cells.has(r.cell)) {
         cells.add(r.cell);
         await page.evaluate(([px]) => window.sightline.look(px), [step % 2 ? 60 : 0]);
@@ -123,6 +125,19 @@ async function main() {
     await page.evaluate(() => window.sightline.render());
     await page.screenshot({ path: join(outDir, 'hidden-red.png') });
     log(`hidden view: ${hidden.length} hidden objects near the viewer in red`);
+
+    // Around the largest PVS of the path, hidden objects shown: 8 headings (docs/img/viewer.png
+    // is one of them).
+    const rb = await page.evaluate(([px, py]) => window.sightline.walkTo(px, py), [best.x, best.y]);
+    const truthB = await getJson(base, `/api/pvs?at=${best.x},${best.y},1.7`);
+    assert.deepEqual(rb.drawn, truthB.visible, 'back at the largest PVS: drawn != PVS');
+    await page.evaluate(() => window.sightline.setShowHidden(true));
+    for (let yaw = 0; yaw < 360; yaw += 45) {
+      await page.evaluate(([a]) => window.sightline.look(a, 2), [yaw]);
+      await page.evaluate(() => window.sightline.render());
+      await page.screenshot({ path: join(outDir, `around-${String(yaw).padStart(3, '0')}.png`) });
+    }
+    log(`around (${best.x.toFixed(1)}, ${best.y.toFixed(1)}): ${rb.drawn.length} objects drawn, 8 headings`);
     await page.evaluate(() => window.sightline.setShowHidden(false));
 
     // The keyboard walks: hold W (with Shift: 14 m/s) for a second.

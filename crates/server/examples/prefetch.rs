@@ -1,18 +1,28 @@
 //! Does prefetch keep the next cell's PVS in hand? (dual ray space paper, §6, Fig. 5)
 //!
 //! A walker follows a random path through the scene at a given speed; the server's prefetch
-//! policy ([`sightline_server::walk`]: the cell and its 8 neighbours at start, then on each
-//! cell change the neighbours not yet sent, ahead first, and two cells ahead at speed) feeds
-//! a pool of `--workers` workers. Compute times are **real**: every cell the policy asks for
-//! is computed by the method on this machine and timed; the clock the walker and the
-//! workers live on is simulated, so that an hour of walking at 1.5 m/s takes only as long as
-//! computing the cells it needs. A cell change is a hit when the new cell's PVS was finished
-//! before the walker entered it (loopback transmission is neglected: milliseconds against
-//! the tens of seconds a 100 m cell takes to cross).
+//! policy ([`sightline_server::walk`]) feeds a pool of `--workers` workers:
+//! * `--policy fig5`: the paper's — the cell and its 8 neighbours at start, then on each cell
+//!   change the neighbours not yet sent, ahead first, and two cells ahead at speed, first
+//!   come first served after demands;
+//! * `--policy ahead` (the server's, default): the same, plus on every step the cell the
+//!   motion leads into ([`CellGrid::next_cell`]) goes before every other prefetch, and on a
+//!   cell change the queued jobs for cells no longer adjacent are withdrawn.
+//!
+//! Compute times are **real**: every cell the policy asks for is computed by the method on
+//! this machine and timed; the clock the walker and the workers live on is simulated, so
+//! that an hour of walking at 1.5 m/s takes only as long as computing the cells it needs.
+//! The cells are computed one after the other (the simulated workers overlap in simulated
+//! time only), so on a machine whose cores are all busy the real pool is slower than this
+//! by up to the number of workers; `examples/load.rs` with one walker against a real
+//! `sightline serve` measures the same figure in real time. A cell change is a hit when the
+//! new cell's PVS was finished before the walker entered it (loopback transmission is
+//! neglected: milliseconds against the seconds a 100 m cell takes to cross).
 //!
 //! ```text
 //! cargo run --release -p sightline-server --example prefetch -- SCENE \
 //!     [--method erosion] [--cell-size 100] [--speed 1.5] [--changes 100] [--workers 2] [--seed 1]
+//!     [--policy ahead|fig5]
 //! ```
 
 use sightline_geom::{DVec2, DVec3};
@@ -30,6 +40,7 @@ struct Args {
     changes: usize,
     workers: usize,
     seed: u64,
+    ahead: bool,
 }
 
 fn args() -> Result<Args, String> {
@@ -41,6 +52,7 @@ fn args() -> Result<Args, String> {
         changes: 100,
         workers: 2,
         seed: 1,
+        ahead: true,
     };
     let mut it = std::env::args().skip(1);
     while let Some(k) = it.next() {
@@ -52,12 +64,19 @@ fn args() -> Result<Args, String> {
             "--changes" => a.changes = v()?.parse().map_err(|e| format!("{e}"))?,
             "--workers" => a.workers = v()?.parse().map_err(|e| format!("{e}"))?,
             "--seed" => a.seed = v()?.parse().map_err(|e| format!("{e}"))?,
+            "--policy" => {
+                a.ahead = match v()?.as_str() {
+                    "ahead" => true,
+                    "fig5" => false,
+                    p => return Err(format!("unknown policy {p} (ahead, fig5)")),
+                }
+            }
             s if !s.starts_with("--") && a.scene.is_empty() => a.scene = s.to_string(),
             s => return Err(format!("unknown argument {s}")),
         }
     }
     if a.scene.is_empty() {
-        return Err("usage: prefetch SCENE [--method M] [--cell-size S] [--speed V] [--changes N] [--workers W] [--seed S]".into());
+        return Err("usage: prefetch SCENE [--method M] [--cell-size S] [--speed V] [--changes N] [--workers W] [--seed S] [--policy ahead|fig5]".into());
     }
     Ok(a)
 }
@@ -72,6 +91,11 @@ impl Rng {
     }
 }
 
+/// Job priorities, as [`sightline_server::cache::Priority`].
+const DEMAND: u8 = 0;
+const AHEAD: u8 = 1;
+const PREFETCH: u8 = 2;
+
 /// Simulated server: jobs by priority (demand first, then request order) on `workers`.
 struct Sim<'a> {
     method: &'a dyn sightline_methods::VisibilityMethod,
@@ -84,9 +108,46 @@ struct Sim<'a> {
     sent: HashSet<CellId>,
     compute_s: Vec<f64>,
     sizes: Vec<usize>,
+    cancelled: usize,
 }
 
 impl Sim<'_> {
+    /// Request `cell` at `prio`, or move its queued job up to `prio`.
+    fn promote(&mut self, cell: CellId, prio: u8, t: f64) {
+        if !self.sent.contains(&cell) {
+            return self.request(cell, prio, t);
+        }
+        let Some(k) = self
+            .queued
+            .iter()
+            .find(|(k, v)| v.0 == cell && k.0 > prio)
+            .map(|(k, _)| *k)
+        else {
+            return;
+        };
+        if let Some(v) = self.queued.remove(&k) {
+            self.seq += 1;
+            self.queued.insert((prio, self.seq), v);
+        }
+    }
+
+    /// Withdraw the queued jobs of cells not in `keep`.
+    fn withdraw_except(&mut self, keep: &[CellId]) {
+        let before = self.queued.len();
+        let mut gone = vec![];
+        self.queued.retain(|_, v| {
+            let k = keep.contains(&v.0);
+            if !k {
+                gone.push(v.0);
+            }
+            k
+        });
+        for c in gone {
+            self.sent.remove(&c);
+        }
+        self.cancelled += before - self.queued.len();
+    }
+
     fn request(&mut self, cell: CellId, prio: u8, t: f64) {
         if self.sent.insert(cell) {
             self.seq += 1;
@@ -190,13 +251,14 @@ fn main() {
         sent: HashSet::new(),
         compute_s: vec![],
         sizes: vec![],
+        cancelled: 0,
     };
     let cell_of = |p: DVec2| grid.locate(DVec3::new(p.x, p.y, 1.7)).ok();
     let Some(mut cell) = cell_of(p) else { return };
     let mut t = 0.0;
-    sim.request(cell, 0, t);
+    sim.request(cell, DEMAND, t);
     for n in grid.neighbours(cell, DVec2::ZERO) {
-        sim.request(n, 1, t);
+        sim.request(n, PREFETCH, t);
     }
     let dt = 1.0; // s per walking step
     let (mut changes, mut hits, mut waits) = (0usize, 0usize, vec![]);
@@ -214,6 +276,13 @@ fn main() {
         t += dt;
         sim.run_until(t);
         p = q;
+        if a.ahead {
+            if let Some(n) = grid.next_cell(p, dir) {
+                if !sim.ready.contains_key(&n) {
+                    sim.promote(n, AHEAD, t);
+                }
+            }
+        }
         let Some(c) = cell_of(p) else { continue };
         if c != cell {
             changes += 1;
@@ -222,13 +291,7 @@ fn main() {
                 hits += 1;
             } else {
                 // Not in hand: demand it now (promoted if queued) and measure the wait.
-                if !sim.sent.contains(&c) {
-                    sim.request(c, 0, t);
-                } else if let Some(k) = sim.queued.iter().find(|(_, v)| v.0 == c).map(|(k, _)| *k) {
-                    let v = sim.queued.remove(&k).unwrap_or((c, t));
-                    sim.seq += 1;
-                    sim.queued.insert((0, sim.seq), v);
-                }
+                sim.promote(c, DEMAND, t);
                 while !sim.ready.contains_key(&c) {
                     let before = sim.queued.len();
                     sim.run_until(f64::INFINITY.min(t + 1e6));
@@ -246,8 +309,13 @@ fn main() {
                     next.insert(1.min(next.len()), x);
                 }
             }
+            if a.ahead {
+                let mut keep = next.clone();
+                keep.push(cell);
+                sim.withdraw_except(&keep);
+            }
             for n in next {
-                sim.request(n, 1, t);
+                sim.request(n, PREFETCH, t);
             }
         }
     }
@@ -261,7 +329,7 @@ fn main() {
     println!(
         "prefetch: scene {} ({} objects), method {}, {} m cells, speed {} m/s ({:.0} s per cell), {} workers\n  \
          cell changes {changes}, PVS in hand on entry {hits} ({:.1} %), waits when not: median {:.1} s, max {:.1} s\n  \
-         cells computed {}, compute per cell median {:.2} s, p90 {:.2} s, max {:.2} s; PVS size median {}, p90 {}\n  \
+         policy {}, cells computed {} (withdrawn before start {}), compute per cell median {:.2} s, p90 {:.2} s, max {:.2} s; PVS size median {}, p90 {}\n  \
          simulated walk {:.0} s, wall time {:.0} s",
         a.scene,
         scene.len(),
@@ -273,7 +341,9 @@ fn main() {
         100.0 * hits as f64 / changes.max(1) as f64,
         med(&waits),
         waits.last().copied().unwrap_or(0.0),
+        if a.ahead { "ahead" } else { "fig5" },
         cs.len(),
+        sim.cancelled,
         med(&cs),
         p90(&cs),
         cs.last().copied().unwrap_or(0.0),

@@ -7,8 +7,11 @@
 //!   holds (so memory is bounded whatever the PVS sizes);
 //! * one computation per cell at a time, however many sessions wait for it;
 //! * a fixed number of worker threads (the only place methods run), taking jobs by
-//!   priority — a client standing in a cell it has no PVS for ([`Priority::Demand`])
-//!   before the cells it may enter next ([`Priority::Prefetch`]);
+//!   priority — a client standing in a cell it has no PVS for ([`Priority::Demand`]),
+//!   then the cell a client is heading into ([`Priority::Ahead`]), then the other cells it
+//!   may enter next ([`Priority::Prefetch`]);
+//! * stale work is dropped: a queued job whose every waiter has gone (the session moved on
+//!   and cancelled its request, or disconnected) is skipped instead of computed;
 //! * a bounded prefetch queue: when it is full new prefetches are refused (counted) rather
 //!   than letting the backlog, and the latency of demands behind it, grow without bound.
 
@@ -29,8 +32,10 @@ pub type Pvs = Arc<Vec<u32>>;
 pub enum Priority {
     /// A client is in the cell (or an HTTP query asks for it).
     Demand = 0,
+    /// A client is heading into the cell: the neighbour its direction of motion reaches.
+    Ahead = 1,
     /// A client may enter the cell next.
-    Prefetch = 1,
+    Prefetch = 2,
 }
 
 /// Why a PVS could not be had.
@@ -72,6 +77,8 @@ pub struct CacheStats {
     pub misses: u64,
     pub computed: u64,
     pub refused: u64,
+    /// Queued jobs dropped because nobody waited for them any more.
+    pub cancelled: u64,
     pub errors: u64,
     pub compute_ms_total: f64,
     pub compute_ms_max: f64,
@@ -166,6 +173,7 @@ struct Shared {
     misses: AtomicU64,
     computed: AtomicU64,
     refused: AtomicU64,
+    cancelled: AtomicU64,
     errors: AtomicU64,
     compute_us_total: AtomicU64,
     compute_us_max: AtomicU64,
@@ -198,6 +206,7 @@ impl PvsCache {
             misses: AtomicU64::new(0),
             computed: AtomicU64::new(0),
             refused: AtomicU64::new(0),
+            cancelled: AtomicU64::new(0),
             errors: AtomicU64::new(0),
             compute_us_total: AtomicU64::new(0),
             compute_us_max: AtomicU64::new(0),
@@ -226,7 +235,8 @@ impl PvsCache {
         self.shared.lock().lru.get(cell)
     }
 
-    /// The PVS of `cell`, computing it if needed.
+    /// The PVS of `cell`, computing it if needed. Dropping the future before it is answered
+    /// withdraws the request: a job nobody waits for any more is not computed.
     pub async fn get(&self, cell: CellId, prio: Priority) -> Result<Pvs, CacheError> {
         let rx = {
             let mut g = self.shared.lock();
@@ -299,6 +309,7 @@ impl PvsCache {
             misses: s.misses.load(Ordering::Relaxed),
             computed: s.computed.load(Ordering::Relaxed),
             refused: s.refused.load(Ordering::Relaxed),
+            cancelled: s.cancelled.load(Ordering::Relaxed),
             errors: s.errors.load(Ordering::Relaxed),
             compute_ms_total: s.compute_us_total.load(Ordering::Relaxed) as f64 / 1000.0,
             compute_ms_max: s.compute_us_max.load(Ordering::Relaxed) as f64 / 1000.0,
@@ -352,10 +363,16 @@ fn worker(s: Arc<Shared>) {
                         if f.running || f.prio != job.prio {
                             continue; // stale entry of a promoted job
                         }
-                        f.running = true;
                         if job.prio == Priority::Prefetch {
                             inner.queued_prefetch -= 1;
                         }
+                        if f.waiters.iter().all(|w| w.is_closed()) {
+                            // Every requester withdrew: drop the job.
+                            inner.inflight.remove(&job.cell);
+                            s.cancelled.fetch_add(1, Ordering::Relaxed);
+                            continue;
+                        }
+                        f.running = true;
                         break job.cell;
                     }
                     None => g = s.work.wait(g).unwrap_or_else(|p| p.into_inner()),
@@ -524,6 +541,58 @@ mod tests {
         assert!(refused > 0);
         assert_eq!(c.stats().refused, refused);
         assert_eq!(*c.get(50, Priority::Demand).await.unwrap(), vec![50]);
+    }
+
+    #[tokio::test]
+    async fn withdrawn_requests_are_not_computed() {
+        let (src, c) = cache(1000, 100);
+        // Keep both workers busy with demands, queue a request and withdraw it.
+        let demands: Vec<_> = (1..=4)
+            .map(|k| {
+                let c = c.clone();
+                tokio::spawn(async move { c.get(k, Priority::Demand).await })
+            })
+            .collect();
+        tokio::time::sleep(std::time::Duration::from_millis(1)).await;
+        let r = tokio::time::timeout(
+            std::time::Duration::from_millis(0),
+            c.get(30, Priority::Ahead),
+        )
+        .await;
+        assert!(r.is_err(), "not answered yet: the workers are busy");
+        for d in demands {
+            d.await.unwrap().unwrap();
+        }
+        tokio::time::sleep(std::time::Duration::from_millis(30)).await;
+        let s = c.stats();
+        assert_eq!(s.cancelled, 1);
+        assert_eq!(s.computed, 4);
+        assert_eq!(src.calls.load(Ordering::SeqCst), 4);
+        // Asked again, it is computed.
+        assert_eq!(*c.get(30, Priority::Prefetch).await.unwrap(), vec![30]);
+    }
+
+    #[test]
+    fn jobs_pop_demand_then_ahead_then_prefetch_oldest_first() {
+        let mut q = BinaryHeap::new();
+        for (seq, (cell, prio)) in [
+            (40, Priority::Prefetch),
+            (41, Priority::Ahead),
+            (42, Priority::Prefetch),
+            (43, Priority::Demand),
+            (44, Priority::Ahead),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            q.push(Job {
+                prio,
+                seq: seq as u64,
+                cell,
+            });
+        }
+        let order: Vec<CellId> = std::iter::from_fn(|| q.pop().map(|j| j.cell)).collect();
+        assert_eq!(order, vec![43, 41, 44, 40, 42]);
     }
 
     #[tokio::test]

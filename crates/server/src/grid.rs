@@ -166,6 +166,50 @@ impl CellGrid {
         out.into_iter().map(|(_, c)| c).collect()
     }
 
+    /// The cell a client at `p` moving along `heading` enters next: the neighbour of `p`'s
+    /// cell across the side (or corner) its ray leaves through. `None` when standing still,
+    /// outside the grid, or leaving the grid.
+    pub fn next_cell(&self, p: DVec2, heading: DVec2) -> Option<CellId> {
+        let h = heading.normalize_or_zero();
+        if h == DVec2::ZERO || !p.is_finite() {
+            return None;
+        }
+        let id = self.locate(DVec3::new(p.x, p.y, self.z_range_m[0])).ok()?;
+        let (ix, iy) = self.coords(id)?;
+        let s = self.cell_size_m;
+        let lo = DVec2::new(
+            self.origin[0] + ix as f64 * s,
+            self.origin[1] + iy as f64 * s,
+        );
+        // Distance along the ray to the side crossed in x and in y.
+        let t = |pc: f64, lo: f64, hc: f64| {
+            if hc > 0.0 {
+                (lo + s - pc) / hc
+            } else if hc < 0.0 {
+                (lo - pc) / hc
+            } else {
+                f64::INFINITY
+            }
+        };
+        let (tx, ty) = (t(p.x, lo.x, h.x), t(p.y, lo.y, h.y));
+        let eps = 1e-9 * s;
+        let dx = if tx <= ty + eps {
+            h.x.signum() as i64
+        } else {
+            0
+        };
+        let dy = if ty <= tx + eps {
+            h.y.signum() as i64
+        } else {
+            0
+        };
+        let (jx, jy) = (ix as i64 + dx, iy as i64 + dy);
+        if (dx, dy) == (0, 0) || jx < 0 || jy < 0 || jx >= self.nx as i64 || jy >= self.ny as i64 {
+            return None;
+        }
+        Some(jy as u32 * self.nx + jx as u32)
+    }
+
     /// The cell `steps` cells ahead of `id` along `heading` (rounded to the nearest of the
     /// 8 directions), if inside the grid: what a fast client reaches after the neighbour.
     pub fn ahead(&self, id: CellId, heading: DVec2, steps: u32) -> Option<CellId> {
@@ -186,6 +230,30 @@ impl CellGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn next_cell_is_across_the_side_the_ray_leaves_through() {
+        let g = grid(); // 3 × 2 cells of 100 m from (-50, 0)
+        let p = DVec2::new(0.0, 50.0); // cell 0, centre
+        assert_eq!(g.next_cell(p, DVec2::new(1.0, 0.0)), Some(1));
+        assert_eq!(g.next_cell(p, DVec2::new(0.0, 1.0)), Some(3));
+        assert_eq!(g.next_cell(p, DVec2::new(1.0, 1.0)), Some(4)); // through the corner
+        assert_eq!(g.next_cell(p, DVec2::new(-1.0, 0.0)), None); // leaves the grid
+        assert_eq!(g.next_cell(p, DVec2::ZERO), None);
+        // Near the top side, heading mostly east: the top side comes first.
+        assert_eq!(
+            g.next_cell(DVec2::new(0.0, 95.0), DVec2::new(1.0, 0.2)),
+            Some(3)
+        );
+        assert_eq!(
+            g.next_cell(DVec2::new(0.0, 5.0), DVec2::new(1.0, 0.2)),
+            Some(1)
+        );
+        assert_eq!(
+            g.next_cell(DVec2::new(1e6, 0.0), DVec2::new(1.0, 0.0)),
+            None
+        );
+    }
 
     fn grid() -> CellGrid {
         let b = Aabb3::new(DVec3::new(-50.0, 0.0, 0.0), DVec3::new(250.0, 180.0, 30.0));

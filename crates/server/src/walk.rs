@@ -8,6 +8,11 @@
 //!   to a side or corner neighbour: the three behind were already sent), and, at driving
 //!   speed, the cell two steps ahead — so that the PVS of the next cell is in the client's
 //!   hands before it gets there;
+//! * beyond Fig. 5, on every position report the cell the client's direction of motion
+//!   leads into ([`crate::grid::CellGrid::next_cell`]) is requested at
+//!   [`Priority::Ahead`], ahead of every other prefetch, and on a cell change the requests
+//!   for cells no longer adjacent are withdrawn (the cache skips jobs nobody waits for), so
+//!   that at driving speed the workers spend their time on the cell the client reaches next;
 //! * each cell's PVS travels as a **delta** (added / removed ids) against the PVS the
 //!   client is displaying, and the geometry of objects the client has never received
 //!   goes along in binary `SLG1` frames ([`crate::geometry`]), sent *before* the message
@@ -134,8 +139,11 @@ struct Session {
     /// Cells whose PVS the client holds, oldest first.
     held: HashMap<CellId, Pvs>,
     held_order: VecDeque<CellId>,
-    /// Cells requested from the cache and not answered yet.
-    pending: HashMap<CellId, Priority>,
+    /// Cells requested from the cache and not answered yet, with the tasks waiting for them
+    /// (aborted to withdraw the request).
+    pending: HashMap<CellId, (Priority, Vec<tokio::task::AbortHandle>)>,
+    /// The cell the client is heading into, as last requested at [`Priority::Ahead`].
+    heading_into: Option<CellId>,
     current: Option<CellId>,
     /// The cell whose PVS the client displays (deltas are against it).
     display: Option<CellId>,
@@ -164,6 +172,7 @@ impl Session {
             held: HashMap::new(),
             held_order: VecDeque::new(),
             pending: HashMap::new(),
+            heading_into: None,
             current: None,
             display: None,
             last: None,
@@ -323,7 +332,7 @@ impl Session {
                 self.display = Some(cell);
             } else if let Some(v) = self.s.cache.peek(cell) {
                 // Computed for someone else already: answer at once.
-                self.pending.remove(&cell);
+                self.withdraw(cell);
                 if !self.send_cell(ws, cell, v).await {
                     return Err(());
                 }
@@ -338,12 +347,33 @@ impl Session {
                     next.insert(1.min(next.len()), a);
                 }
             }
+            // Withdraw what is no longer adjacent: stale work for the workers.
+            let stale: Vec<CellId> = self
+                .pending
+                .keys()
+                .copied()
+                .filter(|c| *c != cell && !next.contains(c))
+                .collect();
+            for c in stale {
+                self.withdraw(c);
+            }
+            self.heading_into = None;
             for n in next {
                 if !self.held.contains_key(&n) {
                     self.request(n, Priority::Prefetch);
                 }
             }
             self.forget_old(ws).await?;
+        }
+        // The cell the motion leads into goes before the other prefetches.
+        let into = src.grid().next_cell(p.truncate(), self.heading);
+        if into != self.heading_into {
+            self.heading_into = into;
+            if let Some(n) = into {
+                if !self.held.contains_key(&n) {
+                    self.request(n, Priority::Ahead);
+                }
+            }
         }
         if let Some(seq) = seq {
             let ack = json!({
@@ -360,18 +390,31 @@ impl Session {
     }
 
     /// Ask the cache for a cell; the answer arrives on `self.rx`.
+    /// A better priority than a pending request's asks again (the cache promotes the job).
     fn request(&mut self, cell: CellId, prio: Priority) {
         match self.pending.get(&cell) {
-            Some(p) if *p <= prio => return,
+            Some((p, _)) if *p <= prio => return,
             _ => {}
         }
-        self.pending.insert(cell, prio);
         let cache = self.s.cache.clone();
         let tx = self.tx.clone();
-        tokio::spawn(async move {
+        let task = tokio::spawn(async move {
             let r = cache.get(cell, prio).await;
             let _ = tx.send((cell, r));
         });
+        let e = self.pending.entry(cell).or_insert((prio, vec![]));
+        e.0 = prio;
+        e.1.push(task.abort_handle());
+    }
+
+    /// Withdraw the requests for a cell (if the cache has not started on it, and nobody
+    /// else asked, it is not computed).
+    fn withdraw(&mut self, cell: CellId) {
+        if let Some((_, tasks)) = self.pending.remove(&cell) {
+            for t in tasks {
+                t.abort();
+            }
+        }
     }
 
     async fn on_done(
@@ -488,6 +531,18 @@ impl Session {
             Ok(())
         } else {
             Err(())
+        }
+    }
+}
+
+impl Drop for Session {
+    /// A closed session withdraws everything it still waits for: the workers must not
+    /// spend minutes on cells for a client that has gone.
+    fn drop(&mut self) {
+        for (_, (_, tasks)) in self.pending.drain() {
+            for t in tasks {
+                t.abort();
+            }
         }
     }
 }

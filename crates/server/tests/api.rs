@@ -252,6 +252,102 @@ async fn walk_prefetches_neighbours_and_sends_deltas() {
 }
 
 #[tokio::test]
+async fn a_closed_session_withdraws_what_it_waited_for() {
+    let scene = Arc::new(block_city(6));
+    let src = near_source(scene.clone(), 50.0, 30.0, 100);
+    let config = ServerConfig {
+        cache: sightline_server::cache::CacheConfig {
+            workers: 1,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let s = TestServer::start(scene.clone(), src, config).await;
+    let mut ws = ws_connect(s.addr, "").await;
+    assert_eq!(ws_next(&mut ws).await.unwrap().unwrap()["type"], "welcome");
+    ws_send(
+        &mut ws,
+        json!({"type": "pos", "x": 75.0, "y": 75.0, "z": 1.7, "seq": 0}),
+    )
+    .await;
+    // The ack: the session has queued its 9 cells.
+    while ws_next(&mut ws)
+        .await
+        .unwrap()
+        .map_or(true, |v| v["type"] != "ack")
+    {}
+    drop(ws);
+    let mut cache = serde_json::Value::Null;
+    for _ in 0..100 {
+        let v: serde_json::Value =
+            serde_json::from_slice(&http_get(s.addr, "/api/stats").await.2).unwrap();
+        cache = v["cache"].clone();
+        if cache["cancelled"].as_u64().unwrap() >= 7 && cache["queued"] == 0 {
+            break;
+        }
+        tokio::time::sleep(std::time::Duration::from_millis(50)).await;
+    }
+    assert!(cache["cancelled"].as_u64().unwrap() >= 7, "{cache}");
+    assert!(cache["computed"].as_u64().unwrap() <= 2, "{cache}");
+    s.stop().await.unwrap();
+}
+
+#[tokio::test]
+async fn a_jump_withdraws_the_prefetches_left_behind() {
+    // One slow worker: the old neighbourhood's prefetches are still queued at the jump.
+    let scene = Arc::new(block_city(6));
+    let src = near_source(scene.clone(), 50.0, 30.0, 100);
+    let config = ServerConfig {
+        cache: sightline_server::cache::CacheConfig {
+            workers: 1,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let s = TestServer::start(scene.clone(), src, config).await;
+    let mut ws = ws_connect(s.addr, "").await;
+    let mut c = ClientState::default();
+    assert_eq!(c.apply(&ws_next(&mut ws).await.unwrap()), "welcome");
+    ws_send(
+        &mut ws,
+        json!({"type": "pos", "x": 75.0, "y": 75.0, "z": 1.7}),
+    )
+    .await;
+    // Cell (4, 4): no neighbour in common with (1, 1).
+    ws_send(
+        &mut ws,
+        json!({"type": "pos", "x": 225.0, "y": 225.0, "z": 1.7, "seq": 1}),
+    )
+    .await;
+    let grid = CellGrid::cover(&scene.bounds, 50.0).unwrap();
+    let far = grid
+        .locate(sightline_geom::DVec3::new(225.0, 225.0, 1.7))
+        .unwrap();
+    while !c.cells.contains_key(&far) {
+        c.apply(&ws_next(&mut ws).await.expect("open"));
+    }
+    // Of the 8 prefetches of (1, 1), at most one had started when the client jumped; the
+    // worker drops the others when it comes to them.
+    let mut cache = serde_json::Value::Null;
+    for _ in 0..100 {
+        let stats = http_get(s.addr, "/api/stats").await.2;
+        let v: serde_json::Value = serde_json::from_slice(&stats).unwrap();
+        cache = v["cache"].clone();
+        if cache["cancelled"].as_u64().unwrap() >= 7 {
+            break;
+        }
+        tokio::time::sleep(std::time::Duration::from_millis(50)).await;
+    }
+    assert!(cache["cancelled"].as_u64().unwrap() >= 7, "{cache}");
+    assert!(
+        cache["computed"].as_u64().unwrap() <= 1 + 1 + 8 + 1,
+        "{cache}"
+    );
+    assert!(c.errors.is_empty(), "{:?}", c.errors);
+    s.stop().await.unwrap();
+}
+
+#[tokio::test]
 async fn malformed_messages_get_error_frames_and_never_crash() {
     let (_scene, s) = near_server(ServerConfig {
         max_session_errors: 10,

@@ -9,6 +9,7 @@ use sightline_server::source::{PvsSource, SharedSource, SourceError, SourceInfo}
 use sightline_server::{Server, ServerConfig};
 use std::net::SocketAddr;
 use std::sync::Arc;
+use std::time::Instant;
 use tokio::sync::oneshot;
 use tokio_tungstenite::tungstenite::Message;
 
@@ -256,5 +257,195 @@ impl ClientState {
                 t
             }
         }
+    }
+}
+
+/// What one load-test walker saw.
+#[derive(Default, Debug)]
+pub struct ClientReport {
+    pub acks: u64,
+    pub latencies_us: Vec<u64>,
+    pub cell_changes: u64,
+    pub in_hand: u64,
+    pub bytes: u64,
+    pub errors: Vec<String>,
+}
+
+/// xorshift: the paths are random but reproducible per client.
+pub struct Rng(pub u64);
+impl Rng {
+    pub fn f(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// How a load-test walker moves.
+#[derive(Clone, Copy, Debug)]
+pub struct Walk {
+    /// The rectangle it walks in (scene coordinates): `[x0, y0, x1, y1]`.
+    pub area: [f64; 4],
+    pub speed_m_s: f64,
+    /// Position reports per second.
+    pub hz: f64,
+    pub until: Instant,
+}
+
+/// One walker: a random path (random start, heading changes, bouncing off the area's
+/// border), a position report with a sequence number `hz` times a second, and a check of
+/// every message it gets (deltas apply to cells it holds, sizes match, geometry decodes).
+/// The ack latency is the time from sending a position to its `ack`; a cell change is
+/// "in hand" when the ack of the first position in the new cell says the PVS was held.
+pub async fn walker(addr: SocketAddr, seed: u64, walk: Walk) -> ClientReport {
+    let mut rep = ClientReport::default();
+    let ws = match tokio_tungstenite::connect_async(format!("ws://{addr}/api/walk")).await {
+        Ok((ws, _)) => ws,
+        Err(e) => {
+            rep.errors.push(format!("connect: {e}"));
+            return rep;
+        }
+    };
+    let (mut tx, mut rx) = ws.split();
+    let sent: Arc<std::sync::Mutex<std::collections::HashMap<u64, Instant>>> = Arc::default();
+    let sent_w = sent.clone();
+    let [x0, y0, x1, y1] = walk.area;
+    let writer = tokio::spawn(async move {
+        let mut rng = Rng(seed.wrapping_mul(2654435761).wrapping_add(1));
+        let (mut x, mut y) = (x0 + rng.f() * (x1 - x0), y0 + rng.f() * (y1 - y0));
+        let mut a = rng.f() * std::f64::consts::TAU;
+        let mut seq = 0u64;
+        let step_s = 1.0 / walk.hz.max(0.1);
+        let mut tick = tokio::time::interval(std::time::Duration::from_secs_f64(step_s));
+        let hello = serde_json::json!({"type": "hello", "geometry": true}).to_string();
+        if tx.send(Message::Text(hello.into())).await.is_err() {
+            return;
+        }
+        while Instant::now() < walk.until {
+            tick.tick().await;
+            if rng.f() < 0.5 * step_s {
+                a += (rng.f() - 0.5) * 2.0;
+            }
+            x += a.cos() * walk.speed_m_s * step_s;
+            y += a.sin() * walk.speed_m_s * step_s;
+            if !(x0..=x1).contains(&x) || !(y0..=y1).contains(&y) {
+                a += std::f64::consts::PI;
+                x = x.clamp(x0, x1);
+                y = y.clamp(y0, y1);
+            }
+            sent_w
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .insert(seq, Instant::now());
+            let m = serde_json::json!({"type": "pos", "x": x, "y": y, "z": 1.7, "seq": seq});
+            if tx.send(Message::Text(m.to_string().into())).await.is_err() {
+                return;
+            }
+            seq += 1;
+        }
+        let _ = tx.send(Message::Close(None)).await;
+    });
+    let mut state = ClientState::default();
+    let mut cell: Option<u64> = None;
+    loop {
+        let m = match tokio::time::timeout(std::time::Duration::from_secs(30), rx.next()).await {
+            Ok(Some(Ok(m))) => m,
+            Ok(None) | Ok(Some(Err(_))) => break,
+            Err(_) => {
+                rep.errors.push("no message for 30 s".into());
+                break;
+            }
+        };
+        let parsed = match m {
+            Message::Text(t) => {
+                rep.bytes += t.as_str().len() as u64;
+                match serde_json::from_str::<serde_json::Value>(t.as_str()) {
+                    Ok(v) => Ok(v),
+                    Err(e) => {
+                        rep.errors.push(format!("bad JSON from server: {e}"));
+                        continue;
+                    }
+                }
+            }
+            Message::Binary(b) => {
+                rep.bytes += b.len() as u64;
+                if let Err(e) = sightline_server::geometry::decode(&b) {
+                    rep.errors.push(e.to_string());
+                    continue;
+                }
+                Err(b.to_vec())
+            }
+            Message::Close(_) => break,
+            _ => continue,
+        };
+        let applied =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| state.apply(&parsed)));
+        let t = match applied {
+            Ok(t) => t,
+            Err(_) => {
+                rep.errors.push("inconsistent cell message".into());
+                continue;
+            }
+        };
+        if t == "ack" {
+            let v = parsed.as_ref().ok().cloned().unwrap_or_default();
+            rep.acks += 1;
+            if let Some(at) = v["seq"]
+                .as_u64()
+                .and_then(|s| sent.lock().unwrap_or_else(|p| p.into_inner()).remove(&s))
+            {
+                rep.latencies_us.push(at.elapsed().as_micros() as u64);
+            }
+            let c = v["cell"].as_u64();
+            if cell.is_some() && c != cell {
+                rep.cell_changes += 1;
+                if v["held"] == true {
+                    rep.in_hand += 1;
+                }
+            }
+            cell = c;
+        }
+    }
+    rep.errors.append(&mut state.errors);
+    let _ = writer.await;
+    rep
+}
+
+/// Totals over walkers.
+#[derive(Debug)]
+pub struct LoadSummary {
+    pub acks: usize,
+    pub errors: Vec<String>,
+    /// Ack latency p50, p99, max (ms).
+    pub p50_ms: f64,
+    pub p99_ms: f64,
+    pub max_ms: f64,
+    pub cell_changes: u64,
+    pub in_hand: u64,
+    pub bytes: u64,
+}
+
+pub fn summarise(reps: &[ClientReport]) -> LoadSummary {
+    let mut lat: Vec<u64> = reps
+        .iter()
+        .flat_map(|r| r.latencies_us.iter().copied())
+        .collect();
+    lat.sort_unstable();
+    let q = |p: f64| {
+        lat.get(((lat.len() as f64 - 1.0).max(0.0) * p).round() as usize)
+            .copied()
+            .unwrap_or(0) as f64
+            / 1000.0
+    };
+    LoadSummary {
+        acks: lat.len(),
+        errors: reps.iter().flat_map(|r| r.errors.iter().cloned()).collect(),
+        p50_ms: q(0.5),
+        p99_ms: q(0.99),
+        max_ms: q(1.0),
+        cell_changes: reps.iter().map(|r| r.cell_changes).sum(),
+        in_hand: reps.iter().map(|r| r.in_hand).sum(),
+        bytes: reps.iter().map(|r| r.bytes).sum(),
     }
 }
