@@ -103,8 +103,12 @@ fn sigkill_at_random_moments_then_resume_is_byte_identical() {
     let journal = dir.path().join("killed.pvs.journal");
     let mut rng = Lcg(0x5eed);
     let (mut kills, mut kills_with_journal) = (0, 0);
+    // Kills land at a random moment of a full build's time, scaled down whenever a run
+    // finishes before its kill (a loaded machine makes the first timing unreliable): then
+    // the finished file is thrown away and the sequence starts over.
+    let mut scale = 1.0;
     for attempt in 0.. {
-        assert!(attempt < 50, "the build never finished");
+        assert!(attempt < 60, "the build never finished");
         let mut child = Command::new(BIN)
             .args([
                 "build",
@@ -122,10 +126,10 @@ fn sigkill_at_random_moments_then_resume_is_byte_identical() {
             .stderr(Stdio::piped())
             .spawn()
             .unwrap();
-        // The first ten runs are killed at a random moment of a full build's time (a
-        // resumed run may finish first); then one runs to the end.
-        if attempt < 10 {
-            std::thread::sleep(full_time.mul_f64(0.05 + 0.55 * rng.next_f64()));
+        // Up to ten kills at random moments (a resumed run may finish first); then one
+        // run goes to the end.
+        if kills < 10 {
+            std::thread::sleep(full_time.mul_f64(scale * (0.05 + 0.55 * rng.next_f64())));
         } else {
             let out = child.wait_with_output().unwrap();
             assert!(
@@ -139,14 +143,31 @@ fn sigkill_at_random_moments_then_resume_is_byte_identical() {
             Some(status) => {
                 let stderr = child.wait_with_output().unwrap().stderr;
                 assert!(status.success(), "{}", String::from_utf8_lossy(&stderr));
-                break;
+                if kills_with_journal >= 2 {
+                    break;
+                }
+                // Finished before two kills mid-build: start over with earlier kills.
+                let _ = std::fs::remove_file(&out);
+                let _ = std::fs::remove_file(&journal);
+                scale *= 0.5;
+                kills = 0;
+                kills_with_journal = 0;
             }
             None => {
                 let had_journal = journal.exists();
                 child.kill().unwrap(); // SIGKILL
                 let status = child.wait().unwrap();
                 if status.success() {
-                    break;
+                    if kills_with_journal >= 2 {
+                        break;
+                    }
+                    // It finished between the check and the kill: as above.
+                    let _ = std::fs::remove_file(&out);
+                    let _ = std::fs::remove_file(&journal);
+                    scale *= 0.5;
+                    kills = 0;
+                    kills_with_journal = 0;
+                    continue;
                 }
                 kills += 1;
                 kills_with_journal += had_journal as usize;
