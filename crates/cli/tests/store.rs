@@ -139,39 +139,34 @@ fn sigkill_at_random_moments_then_resume_is_byte_identical() {
             );
             break;
         }
-        match child.try_wait().unwrap() {
+        // Whether the run finished before its kill (successfully), or was killed.
+        let finished = match child.try_wait().unwrap() {
             Some(status) => {
                 let stderr = child.wait_with_output().unwrap().stderr;
                 assert!(status.success(), "{}", String::from_utf8_lossy(&stderr));
-                if kills_with_journal >= 2 {
-                    break;
-                }
-                // Finished before two kills mid-build: start over with earlier kills.
-                let _ = std::fs::remove_file(&out);
-                let _ = std::fs::remove_file(&journal);
-                scale *= 0.5;
-                kills = 0;
-                kills_with_journal = 0;
+                true
             }
             None => {
                 let had_journal = journal.exists();
                 child.kill().unwrap(); // SIGKILL
-                let status = child.wait().unwrap();
-                if status.success() {
-                    if kills_with_journal >= 2 {
-                        break;
-                    }
-                    // It finished between the check and the kill: as above.
-                    let _ = std::fs::remove_file(&out);
-                    let _ = std::fs::remove_file(&journal);
-                    scale *= 0.5;
-                    kills = 0;
-                    kills_with_journal = 0;
-                    continue;
+                let killed = !child.wait().unwrap().success();
+                if killed {
+                    kills += 1;
+                    kills_with_journal += had_journal as usize;
                 }
-                kills += 1;
-                kills_with_journal += had_journal as usize;
+                !killed
             }
+        };
+        if finished {
+            if kills_with_journal >= 2 {
+                break;
+            }
+            // Finished before two kills mid-build: start over with earlier kills.
+            let _ = std::fs::remove_file(&out);
+            let _ = std::fs::remove_file(&journal);
+            scale *= 0.5;
+            kills = 0;
+            kills_with_journal = 0;
         }
     }
     assert!(
