@@ -120,27 +120,6 @@ impl Grid {
         }
         m
     }
-
-    /// The greatest value over every pixel meeting the rectangle.
-    pub fn max_over(&self, r: Aabb2) -> u16 {
-        let (i0, i1) = self.range(0, r.min.x, r.max.x);
-        let (j0, j1) = self.range(1, r.min.y, r.max.y);
-        let mut m = 0;
-        for j in j0.max(0)..=j1.min(self.ny - 1) {
-            for i in i0.max(0)..=i1.min(self.nx - 1) {
-                m = m.max(self.data[(j * self.nx + i) as usize]);
-            }
-        }
-        m
-    }
-
-    /// The world rectangle of the raster.
-    pub fn rect(&self) -> Aabb2 {
-        Aabb2::new(
-            self.origin,
-            self.origin + DVec2::new(self.nx as f64, self.ny as f64) * self.pixel_m,
-        )
-    }
 }
 
 /// A raster with its min-pyramid: level `L` holds the least value of each block of
