@@ -114,6 +114,9 @@ pub struct Record {
     pub hidden_fraction: f64,
     /// Median over `timing_repeats` runs.
     pub ms: f64,
+    /// The PVS itself (kept for the storage figure, not written to `raw.json`).
+    #[serde(skip)]
+    pub visible: Vec<u32>,
 }
 
 /// A scene under test with its cached ground truths.
@@ -296,6 +299,7 @@ impl Bench {
                 over,
                 hidden_fraction: 1.0 - pvs.len() as f64 / n_obj.max(1) as f64,
                 ms: median(&times),
+                visible: pvs,
             });
         }
         self.records.extend(out.iter().cloned());
@@ -655,7 +659,7 @@ fn side_by_side(
     rep: &mut Report,
 ) -> anyhow::Result<()> {
     rep.section("All methods on the same cells");
-    rep.para("Per method: ms per cell (median, p90), `over` = |PVS|/|VS| (median, p90), total `missed` (must be 0 for every conservative method), mean hidden fraction.");
+    rep.para("Per method: ms per cell (median, p90), `over` = |PVS|/|VS| (median, p90), total `missed` (must be 0 for every conservative method), mean hidden fraction, and bytes per cell of a `.pvs` holding these cells' sets (compressed sets only; the cells are scattered, so the delta-PVS between neighbours cannot help as it does on a grid).");
     for s in scenes {
         let size = 25.0;
         let cells = pick_cells(&s.scene, size, b.suite.cells_per_setting * 2);
@@ -669,6 +673,7 @@ fn side_by_side(
             "over p90",
             "missed",
             "hidden %",
+            "bytes/cell",
         ]);
         for name in names {
             let Some(m) = b.method(s, name, &MethodOptions::default()) else {
@@ -684,6 +689,8 @@ fn side_by_side(
                 Some(&truths),
             );
             let (om, op, tm, tp, missed, hidden) = summarize(&recs);
+            let bytes = stored_bytes_per_cell(s, m.as_ref(), &recs)
+                .map_or_else(|| "—".to_string(), |v| f(v, 1));
             table.row(vec![
                 name.clone(),
                 recs.len().to_string(),
@@ -693,6 +700,7 @@ fn side_by_side(
                 f(op, 2),
                 missed.to_string(),
                 f(100.0 * hidden, 1),
+                bytes,
             ]);
         }
         rep.para(&format!(
@@ -703,6 +711,26 @@ fn side_by_side(
         rep.table(&table);
     }
     Ok(())
+}
+
+/// Bytes per cell of the DATA section of a `.pvs` holding the records' sets.
+fn stored_bytes_per_cell(s: &NamedScene, m: &dyn VisibilityMethod, recs: &[Record]) -> Option<f64> {
+    if recs.is_empty() {
+        return None;
+    }
+    let cells: Vec<ViewCell> = recs.iter().map(|r| r.cell).collect();
+    let present: Vec<u32> = (0..cells.len() as u32).collect();
+    let sets: Vec<Vec<u32>> = recs.iter().map(|r| r.visible.clone()).collect();
+    let header = sightline_pvs::format::Header::new(
+        s.scene.fingerprint(),
+        m.name(),
+        m.params(),
+        s.scene.objects.len(),
+        cells.len(),
+    );
+    let bytes = sightline_pvs::format::encode(&header, &cells, &present, &sets).ok()?;
+    let file = sightline_pvs::PvsFile::from_bytes(bytes).ok()?;
+    Some(file.sizes().0 as f64 / cells.len() as f64)
 }
 
 /// ms/cell vs number of buildings, log-log with the fitted exponent.
