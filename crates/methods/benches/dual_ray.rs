@@ -9,33 +9,9 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use sightline_geom::ViewCell;
-use sightline_methods::dual_ray::{table1, DualRay, Planarity};
+use sightline_methods::dual_ray::{crossing_cells, table1, DualRay, Planarity};
 use sightline_scene::generate::metropolis;
 use std::sync::Arc;
-
-/// Cells of `size_m` centred on street crossings of the 110 m grid, spread over the city.
-fn street_cells(scene: &sightline_scene::Scene, size_m: f64, n: usize) -> Vec<ViewCell> {
-    let b = scene.bounds;
-    let pitch = 110.0;
-    let cols = ((b.max.x - b.min.x) / pitch).floor().max(1.0) as usize;
-    let rows = ((b.max.y - b.min.y) / pitch).floor().max(1.0) as usize;
-    let mut out = Vec::with_capacity(n);
-    let mut k: u64 = 0x9E37_79B9;
-    while out.len() < n {
-        k = k
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let c = (k >> 33) as usize % cols;
-        let r = (k >> 13) as usize % rows;
-        let cx = b.min.x + c as f64 * pitch;
-        let cy = b.min.y + r as f64 * pitch;
-        let h = size_m / 2.0;
-        if let Ok(cell) = ViewCell::from_array([cx - h, cy - h, 0.0, cx + h, cy + h, 2.0]) {
-            out.push(cell);
-        }
-    }
-    out
-}
 
 fn bench(c: &mut Criterion) {
     let scene = Arc::new(metropolis(1, 100_000));
@@ -44,7 +20,7 @@ fn bench(c: &mut Criterion) {
         scene.clone(),
         Planarity::Discrete { resolution_px: 128 },
     );
-    let cells = street_cells(&scene, 100.0, 16);
+    let cells = crossing_cells(&scene, 100.0, 16);
     let mut g = c.benchmark_group("dual_ray");
     g.sample_size(10);
     let mut i = 0;
@@ -64,7 +40,7 @@ fn bench(c: &mut Criterion) {
     if std::env::var("DUAL_RAY_TABLE1").is_ok() {
         let groups: Vec<(f64, Vec<ViewCell>)> = [50.0, 100.0, 300.0]
             .iter()
-            .map(|s| (*s, street_cells(&scene, *s, 20)))
+            .map(|s| (*s, crossing_cells(&scene, *s, 20)))
             .collect();
         let rows = table1(scene.clone(), &groups, &[16, 32, 64, 128, 256]);
         println!("size_m\tres\tcells\tms_median\tms_mean\tpvs_mean\tover_est\ttests");

@@ -8,36 +8,10 @@
 //! resolutions 16..256 × cells 50/100/300 m, CELLS cells per size).
 
 use sightline_geom::ViewCell;
-use sightline_methods::dual_ray::{table1, DualRay, Planarity};
+use sightline_methods::dual_ray::{crossing_cells, table1, DualRay, Planarity};
 use sightline_scene::generate::metropolis;
-use sightline_scene::Scene;
 use std::sync::Arc;
 use std::time::Instant;
-
-/// Cells of `size_m` centred on street crossings of the 110 m grid, spread over the city
-/// (the cells of the criterion bench).
-fn street_cells(scene: &Scene, size_m: f64, n: usize) -> Vec<ViewCell> {
-    let b = scene.bounds;
-    let pitch = 110.0;
-    let cols = ((b.max.x - b.min.x) / pitch).floor().max(1.0) as usize;
-    let rows = ((b.max.y - b.min.y) / pitch).floor().max(1.0) as usize;
-    let mut out = Vec::with_capacity(n);
-    let mut k: u64 = 0x9E37_79B9;
-    while out.len() < n {
-        k = k
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let c = (k >> 33) as usize % cols;
-        let r = (k >> 13) as usize % rows;
-        let cx = b.min.x + c as f64 * pitch;
-        let cy = b.min.y + r as f64 * pitch;
-        let h = size_m / 2.0;
-        if let Ok(cell) = ViewCell::from_array([cx - h, cy - h, 0.0, cx + h, cy + h, 2.0]) {
-            out.push(cell);
-        }
-    }
-    out
-}
 
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -69,7 +43,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Planarity::Discrete { resolution_px: res },
     );
     println!("prepared in {:.2}s", t.elapsed().as_secs_f64());
-    let cells = street_cells(&scene, size, count);
+    let cells = crossing_cells(&scene, size, count);
     match mode {
         "cells" => {
             let mut ms = Vec::new();
@@ -121,7 +95,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "table1" => {
             let groups: Vec<(f64, Vec<ViewCell>)> = [50.0, 100.0, 300.0]
                 .iter()
-                .map(|s| (*s, street_cells(&scene, *s, count)))
+                .map(|s| (*s, crossing_cells(&scene, *s, count)))
                 .collect();
             let rows = table1(scene.clone(), &groups, &[16, 32, 64, 128, 256]);
             println!(

@@ -398,7 +398,7 @@ fn hidden_plain(scratch: &mut Scratch, first: u32, resolution: u32) -> bool {
 #[cfg(test)]
 mod tests {
     use super::super::occluders::Axis;
-    use super::super::plane::local_rect;
+    use super::super::plane::{orient, Oriented};
     use super::super::{DualRay, Planarity};
     use super::*;
     use sightline_geom::{Aabb3, DVec3};
@@ -423,20 +423,17 @@ mod tests {
             let mut scratch = Scratch::default();
             for (_, b) in &m.tree.items {
                 for axis in [Axis::X, Axis::Y] {
-                    let (ra, rb) = (local_rect(&a, axis), local_rect(b, axis));
-                    let cell_low = ra.x1 < rb.x0;
-                    if !cell_low && rb.x1 >= ra.x0 {
-                        continue;
-                    }
-                    let (lo, lo_top, hi, hi_top) = if cell_low {
-                        (ra, a.max.z, rb, b.max.z)
-                    } else {
-                        (rb, b.max.z, ra, a.max.z)
+                    let Some(Oriented {
+                        lo,
+                        lo_top,
+                        hi,
+                        hi_top,
+                        cell_low,
+                    }) = orient(&a, b, axis)
+                    else {
+                        continue; // not separated along this axis
                     };
-                    let decomp = match axis {
-                        Axis::X => &m.decomp_x,
-                        Axis::Y => &m.decomp_y,
-                    };
+                    let decomp = m.decomposition(axis);
                     Planar::build(&mut scratch, decomp, lo, lo_top, hi, hi_top, None, cell_low);
                     for res in [16, 64, 256] {
                         let h = hidden(&mut scratch, res);

@@ -62,12 +62,12 @@ pub mod plane;
 mod table1;
 pub(crate) mod witness;
 
-pub use table1::{occluded_area_m2, table1, Table1Row};
+pub use table1::{crossing_cells, occluded_area_m2, table1, Table1Row};
 
 use crate::{MethodError, MethodOptions, VisibilityMethod};
 use kdtree::{KdTree, NodeKind};
 use occluders::{Axis, Decomposition};
-use plane::{local_rect, Planar, Scratch};
+use plane::{Planar, Scratch};
 use rayon::prelude::*;
 use sightline_geom::{Aabb3, DVec2, DVec3, ViewCell};
 use sightline_scene::Scene;
@@ -147,6 +147,14 @@ pub fn create(
 }
 
 impl DualRay {
+    /// The occluder decomposition cut along `axis`.
+    fn decomposition(&self, axis: Axis) -> &Decomposition {
+        match axis {
+            Axis::X => &self.decomp_x,
+            Axis::Y => &self.decomp_y,
+        }
+    }
+
     /// Prepare the method: fused occluder decompositions along x and y, kd-tree of the
     /// occludees.
     pub fn new(name: &'static str, scene: Arc<Scene>, planarity: Planarity) -> Self {
@@ -298,17 +306,17 @@ impl DualRay {
             if gap <= 0.0 {
                 continue;
             }
-            let (ra, rb) = (local_rect(a, axis), local_rect(b, axis));
-            let cell_low = ra.x1 < rb.x0;
-            let (lo, lo_top, hi, hi_top) = if cell_low {
-                (ra, a.max.z, rb, b.max.z)
-            } else {
-                (rb, b.max.z, ra, a.max.z)
+            let Some(plane::Oriented {
+                lo,
+                lo_top,
+                hi,
+                hi_top,
+                cell_low,
+            }) = plane::orient(a, b, axis)
+            else {
+                continue;
             };
-            let decomp = match axis {
-                Axis::X => &self.decomp_x,
-                Axis::Y => &self.decomp_y,
-            };
+            let decomp = self.decomposition(axis);
             // First only the occluders near the cell: they usually hide far boxes on
             // their own, at a fraction of the cost (a subset covering is enough).
             let len = hi.x0 - lo.x1;

@@ -267,6 +267,39 @@ pub(crate) fn local_rect(b: &Aabb3, axis: Axis) -> Rect {
     }
 }
 
+/// A cell box `a` and a node box `b` in `axis`-local coordinates, the lower one along
+/// the axis first: `lo.x1 < hi.x0`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Oriented {
+    pub lo: Rect,
+    pub lo_top: f64,
+    pub hi: Rect,
+    pub hi_top: f64,
+    /// The cell is the lower box.
+    pub cell_low: bool,
+}
+
+/// `a` and `b` ordered along `axis`, or `None` when they are not separated along it.
+pub(crate) fn orient(a: &Aabb3, b: &Aabb3, axis: Axis) -> Option<Oriented> {
+    let (ra, rb) = (local_rect(a, axis), local_rect(b, axis));
+    let cell_low = ra.x1 < rb.x0;
+    if !cell_low && rb.x1 >= ra.x0 {
+        return None;
+    }
+    let (lo, lo_top, hi, hi_top) = if cell_low {
+        (ra, a.max.z, rb, b.max.z)
+    } else {
+        (rb, b.max.z, ra, a.max.z)
+    };
+    Some(Oriented {
+        lo,
+        lo_top,
+        hi,
+        hi_top,
+        cell_low,
+    })
+}
+
 impl Planar {
     /// Set up the shaft between `lo` (tops at `lo_top`) and `hi` (`lo.x1 < hi.x0`) and
     /// gather the occluder pieces cut by the ceiling from `decomp`, ordered from the

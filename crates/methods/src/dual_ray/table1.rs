@@ -27,6 +27,32 @@ pub struct Table1Row {
     pub planar_tests_mean: f64,
 }
 
+/// `n` cells of `size_m` (z 0..2 m) centred on street crossings of the generated
+/// metropolis's 110 m grid, spread over the city by a fixed pseudo-random sequence (the
+/// cells of the criterion bench and of the timing example).
+pub fn crossing_cells(scene: &Scene, size_m: f64, n: usize) -> Vec<ViewCell> {
+    let b = scene.bounds;
+    let pitch = 110.0;
+    let cols = ((b.max.x - b.min.x) / pitch).floor().max(1.0) as usize;
+    let rows = ((b.max.y - b.min.y) / pitch).floor().max(1.0) as usize;
+    let mut out = Vec::with_capacity(n);
+    let mut k: u64 = 0x9E37_79B9;
+    while out.len() < n {
+        k = k
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        let c = (k >> 33) as usize % cols;
+        let r = (k >> 13) as usize % rows;
+        let cx = b.min.x + c as f64 * pitch;
+        let cy = b.min.y + r as f64 * pitch;
+        let h = size_m / 2.0;
+        if let Ok(cell) = ViewCell::from_array([cx - h, cy - h, 0.0, cx + h, cy + h, 2.0]) {
+            out.push(cell);
+        }
+    }
+    out
+}
+
 /// Total footprint area (m²) of the objects *not* in `pvs` (sorted): the occluded area.
 pub fn occluded_area_m2(scene: &Scene, pvs: &[u32]) -> f64 {
     scene

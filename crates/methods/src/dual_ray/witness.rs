@@ -90,7 +90,7 @@ fn gather_candidates(scratch: &mut Scratch) {
 #[cfg(test)]
 mod tests {
     use super::super::occluders::Axis;
-    use super::super::plane::{local_rect, Planar, Scratch};
+    use super::super::plane::{orient, Oriented, Planar, Scratch};
     use super::super::{discrete, exact, DualRay, Planarity};
     use super::*;
     use sightline_geom::{Aabb3, DVec3};
@@ -112,20 +112,17 @@ mod tests {
             );
             for (_, b) in m.tree.items.iter().step_by(3) {
                 for axis in [Axis::X, Axis::Y] {
-                    let (ra, rb) = (local_rect(&a, axis), local_rect(b, axis));
-                    let cell_low = ra.x1 < rb.x0;
-                    if !cell_low && rb.x1 >= ra.x0 {
+                    let Some(Oriented {
+                        lo,
+                        lo_top,
+                        hi,
+                        hi_top,
+                        cell_low,
+                    }) = orient(&a, b, axis)
+                    else {
                         continue; // not separated along this axis
-                    }
-                    let (lo, lo_top, hi, hi_top) = if cell_low {
-                        (ra, a.max.z, rb, b.max.z)
-                    } else {
-                        (rb, b.max.z, ra, a.max.z)
                     };
-                    let decomp = match axis {
-                        Axis::X => &m.decomp_x,
-                        Axis::Y => &m.decomp_y,
-                    };
+                    let decomp = m.decomposition(axis);
                     let len = hi.x0 - lo.x1;
                     let near = if cell_low { 0.3 * len } else { -0.3 * len };
                     Planar::build(
