@@ -9,28 +9,15 @@
 use glam::DVec3;
 use sightline_raster::{Coverage, Face, Framebuffer, View};
 
+#[path = "../benches/workload/mod.rs"]
+mod workload;
+use workload::triangles;
+
 fn cpu_ns() -> u64 {
     std::fs::read_to_string("/proc/thread-self/schedstat")
         .ok()
         .and_then(|s| s.split_whitespace().next().and_then(|t| t.parse().ok()))
         .unwrap_or(0)
-}
-
-fn triangles(n: usize, size: f64) -> Vec<[DVec3; 3]> {
-    let mut s = 0x2545_f491_4f6c_dd1du64;
-    let mut r = move || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    };
-    (0..n)
-        .map(|_| {
-            let y = 5.0 + 95.0 * r();
-            let c = DVec3::new((r() - 0.5) * 2.0 * y, y, (r() - 0.5) * 2.0 * y);
-            [0, 1, 2].map(|_| c + DVec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * size)
-        })
-        .collect()
 }
 
 /// Median CPU seconds of one call of `f`. The counter advances at scheduler ticks
