@@ -11,10 +11,6 @@ fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Polygon {
     Polygon::rect(DVec2::new(x0, y0), DVec2::new(x1, y1))
 }
 
-fn block(x0: f64, y0: f64, x1: f64, y1: f64, h: f64) -> Object {
-    Object::block(None, rect(x0, y0, x1, y1), 0.0, h)
-}
-
 fn cell(s: &str) -> ViewCell {
     s.parse().expect("valid cell")
 }
@@ -54,10 +50,10 @@ const CELL: &str = "0,0,1.5,10,10,2";
 #[test]
 fn wall_hides_low_building_but_not_tower_behind_it() {
     let scene = Scene::from_objects(vec![
-        block(20.0, -50.0, 22.0, 60.0, 10.0), // 0: wall
-        block(40.0, 0.0, 50.0, 10.0, 6.0),    // 1: low house behind
-        block(40.0, 20.0, 50.0, 30.0, 60.0),  // 2: tower behind
-        block(-40.0, 0.0, -30.0, 10.0, 6.0),  // 3: house on the open side
+        Object::rect_block(20.0, -50.0, 22.0, 60.0, 10.0), // 0: wall
+        Object::rect_block(40.0, 0.0, 50.0, 10.0, 6.0),    // 1: low house behind
+        Object::rect_block(40.0, 20.0, 50.0, 30.0, 60.0),  // 2: tower behind
+        Object::rect_block(-40.0, 0.0, -30.0, 10.0, 6.0),  // 3: house on the open side
     ]);
     for p in pvs_all(scene, CELL) {
         assert_eq!(p, vec![0, 2, 3]);
@@ -72,10 +68,10 @@ fn touching_row_houses_act_as_one_wall() {
     let heights = [10.0, 12.0, 10.0, 14.0, 10.0, 10.0];
     for (k, h) in heights.iter().enumerate() {
         let y0 = -20.0 + 10.0 * k as f64;
-        objs.push(block(20.0, y0, 30.0, y0 + 10.0, *h));
+        objs.push(Object::rect_block(20.0, y0, 30.0, y0 + 10.0, *h));
     }
-    objs.push(block(50.0, 0.0, 60.0, 10.0, 5.0)); // 6: low house behind the row
-    objs.push(block(50.0, 120.0, 60.0, 140.0, 5.0)); // 7: seen past the end of the row
+    objs.push(Object::rect_block(50.0, 0.0, 60.0, 10.0, 5.0)); // 6: low house behind the row
+    objs.push(Object::rect_block(50.0, 120.0, 60.0, 140.0, 5.0)); // 7: seen past the end of the row
     for p in pvs_all(Scene::from_objects(objs), CELL) {
         assert_eq!(p, vec![0, 1, 2, 3, 4, 5, 7]);
     }
@@ -99,7 +95,7 @@ fn slanted_party_walls_fuse_too() {
         );
         objs.push(Object::block(None, f, 0.0, 10.0));
     }
-    objs.push(block(50.0, 0.0, 60.0, 10.0, 5.0)); // 8
+    objs.push(Object::rect_block(50.0, 0.0, 60.0, 10.0, 5.0)); // 8
     for p in pvs_all(Scene::from_objects(objs), CELL) {
         assert_eq!(p, vec![0, 1, 2, 3, 4, 5, 6, 7]);
     }
@@ -108,10 +104,10 @@ fn slanted_party_walls_fuse_too() {
 #[test]
 fn one_metre_slit_shows_a_far_building() {
     let scene = Scene::from_objects(vec![
-        block(20.0, -100.0, 22.0, 4.5, 20.0),   // 0
-        block(20.0, 5.5, 22.0, 100.0, 20.0),    // 1
-        block(200.0, 0.0, 210.0, 10.0, 5.0),    // 2: seen through the slit
-        block(200.0, 200.0, 210.0, 210.0, 5.0), // 3: not in line with the slit
+        Object::rect_block(20.0, -100.0, 22.0, 4.5, 20.0), // 0
+        Object::rect_block(20.0, 5.5, 22.0, 100.0, 20.0),  // 1
+        Object::rect_block(200.0, 0.0, 210.0, 10.0, 5.0),  // 2: seen through the slit
+        Object::rect_block(200.0, 200.0, 210.0, 210.0, 5.0), // 3: not in line with the slit
     ]);
     for p in pvs_all(scene, CELL) {
         assert_eq!(p, vec![0, 1, 2]);
@@ -122,9 +118,9 @@ fn one_metre_slit_shows_a_far_building() {
 fn closed_wall_hides_the_far_building() {
     // The same without the slit: the two walls touch.
     let scene = Scene::from_objects(vec![
-        block(20.0, -100.0, 22.0, 5.0, 20.0),
-        block(20.0, 5.0, 22.0, 100.0, 20.0),
-        block(200.0, 0.0, 210.0, 10.0, 5.0),
+        Object::rect_block(20.0, -100.0, 22.0, 5.0, 20.0),
+        Object::rect_block(20.0, 5.0, 22.0, 100.0, 20.0),
+        Object::rect_block(200.0, 0.0, 210.0, 10.0, 5.0),
     ]);
     for p in pvs_all(scene, CELL) {
         assert_eq!(p, vec![0, 1]);
@@ -138,10 +134,10 @@ fn courtyard_hides_a_kiosk_but_not_a_tower() {
         vec![rect(30.0, -20.0, 70.0, 30.0).exterior],
     );
     let scene = Scene::from_objects(vec![
-        Object::block(None, ring, 0.0, 15.0), // 0
-        block(45.0, -5.0, 55.0, 5.0, 3.0),    // 1: kiosk in the courtyard
-        block(60.0, 20.0, 65.0, 25.0, 100.0), // 2: tower in the courtyard
-        block(100.0, 0.0, 110.0, 10.0, 5.0),  // 3: house beyond the block
+        Object::block(None, ring, 0.0, 15.0),              // 0
+        Object::rect_block(45.0, -5.0, 55.0, 5.0, 3.0),    // 1: kiosk in the courtyard
+        Object::rect_block(60.0, 20.0, 65.0, 25.0, 100.0), // 2: tower in the courtyard
+        Object::rect_block(100.0, 0.0, 110.0, 10.0, 5.0),  // 3: house beyond the block
     ]);
     for p in pvs_all(scene, CELL) {
         assert_eq!(p, vec![0, 2]);
@@ -151,9 +147,9 @@ fn courtyard_hides_a_kiosk_but_not_a_tower() {
 #[test]
 fn cell_touching_a_facade() {
     let scene = Scene::from_objects(vec![
-        block(10.0, -20.0, 30.0, 30.0, 10.0), // 0: the cell's x1 face lies on its facade
-        block(40.0, 0.0, 50.0, 10.0, 5.0),    // 1: behind it
-        block(-30.0, 0.0, -20.0, 10.0, 5.0),  // 2: in the open
+        Object::rect_block(10.0, -20.0, 30.0, 30.0, 10.0), // 0: the cell's x1 face lies on its facade
+        Object::rect_block(40.0, 0.0, 50.0, 10.0, 5.0),    // 1: behind it
+        Object::rect_block(-30.0, 0.0, -20.0, 10.0, 5.0),  // 2: in the open
     ]);
     for p in pvs_all(scene, CELL) {
         assert_eq!(p, vec![0, 2]);
@@ -163,9 +159,9 @@ fn cell_touching_a_facade() {
 #[test]
 fn cell_cutting_through_a_building_sees_from_its_free_part() {
     let scene = Scene::from_objects(vec![
-        block(5.0, -20.0, 30.0, 30.0, 10.0), // 0: overlaps the cell (free part x < 5)
-        block(40.0, 0.0, 50.0, 10.0, 5.0),   // 1: behind it
-        block(-30.0, 0.0, -20.0, 10.0, 5.0), // 2: in the open
+        Object::rect_block(5.0, -20.0, 30.0, 30.0, 10.0), // 0: overlaps the cell (free part x < 5)
+        Object::rect_block(40.0, 0.0, 50.0, 10.0, 5.0),   // 1: behind it
+        Object::rect_block(-30.0, 0.0, -20.0, 10.0, 5.0), // 2: in the open
     ]);
     for p in pvs_all(scene, CELL) {
         assert_eq!(p, vec![0, 2]);
@@ -176,9 +172,9 @@ fn cell_cutting_through_a_building_sees_from_its_free_part() {
 fn diagonal_boxes_are_hidden_along_either_axis() {
     // Separated from the cell along both x and y; only the x shaft crosses the wall.
     let scene = Scene::from_objects(vec![
-        block(15.0, -100.0, 17.0, 100.0, 12.0), // 0: wall
-        block(30.0, 12.0, 40.0, 20.0, 4.0),     // 1: larger gap in x (x shaft first)
-        block(20.0, 40.0, 25.0, 50.0, 4.0),     // 2: larger gap in y (x shaft second)
+        Object::rect_block(15.0, -100.0, 17.0, 100.0, 12.0), // 0: wall
+        Object::rect_block(30.0, 12.0, 40.0, 20.0, 4.0),     // 1: larger gap in x (x shaft first)
+        Object::rect_block(20.0, 40.0, 25.0, 50.0, 4.0),     // 2: larger gap in y (x shaft second)
     ]);
     for p in pvs_all(scene, CELL) {
         assert_eq!(p, vec![0]);
@@ -188,7 +184,7 @@ fn diagonal_boxes_are_hidden_along_either_axis() {
 #[test]
 fn flat_streets_and_raised_prisms() {
     let scene = Scene::from_objects(vec![
-        block(20.0, -50.0, 22.0, 60.0, 10.0),                  // 0: wall
+        Object::rect_block(20.0, -50.0, 22.0, 60.0, 10.0), // 0: wall
         Object::flat(None, vec![rect(40.0, 0.0, 60.0, 10.0)]), // 1: street behind the wall
         Object::flat(None, vec![rect(-5.0, -5.0, 15.0, 15.0)]), // 2: street under the cell
         // 3: an arcade (raised prism, never occludes) in front of 4
@@ -196,7 +192,7 @@ fn flat_streets_and_raised_prisms() {
             None,
             vec![Prism::new(rect(-22.0, -50.0, -20.0, 60.0), 3.0, 10.0)],
         ),
-        block(-40.0, 0.0, -30.0, 10.0, 2.5), // 4: seen under the arcade
+        Object::rect_block(-40.0, 0.0, -30.0, 10.0, 2.5), // 4: seen under the arcade
     ]);
     for p in pvs_all(scene, CELL) {
         assert_eq!(p, vec![0, 2, 3, 4]);
@@ -206,8 +202,8 @@ fn flat_streets_and_raised_prisms() {
 #[test]
 fn neighbourhood_is_nine_cells_around() {
     let scene = Arc::new(Scene::from_objects(vec![
-        block(20.0, -50.0, 22.0, 60.0, 10.0),
-        block(40.0, 0.0, 50.0, 10.0, 6.0),
+        Object::rect_block(20.0, -50.0, 22.0, 60.0, 10.0),
+        Object::rect_block(40.0, 0.0, 50.0, 10.0, 6.0),
     ]));
     let m = DualRay::new(
         "dual-ray",

@@ -5,7 +5,7 @@ mod erosion_support;
 
 use erosion_support::*;
 use sightline_methods::{create, MethodOptions};
-use sightline_scene::Scene;
+use sightline_scene::{Object, Scene};
 use std::sync::Arc;
 
 fn pvs(scene: &Arc<Scene>, method: &str, cell: &sightline_geom::ViewCell) -> Vec<u32> {
@@ -31,9 +31,9 @@ fn assert_conservative(scene: &Arc<Scene>, cell: &sightline_geom::ViewCell) {
 fn wall_scene() -> Arc<Scene> {
     // 0: wall at x 20..21; 1: low block behind; 2: tower behind; 3: street behind.
     Arc::new(Scene::from_objects(vec![
-        block(20.0, -40.0, 21.0, 40.0, 10.0),
-        block(40.0, -5.0, 50.0, 5.0, 8.0),
-        block(60.0, -5.0, 70.0, 5.0, 80.0),
+        Object::rect_block(20.0, -40.0, 21.0, 40.0, 10.0),
+        Object::rect_block(40.0, -5.0, 50.0, 5.0, 8.0),
+        Object::rect_block(60.0, -5.0, 70.0, 5.0, 80.0),
         street(75.0, -3.0, 120.0, 3.0),
     ]))
 }
@@ -63,8 +63,8 @@ fn tower_seen_from_the_back_of_the_cell_over_a_low_wall() {
     // The literal §3.3 (segment at the cell's height) would hide the tower: from the
     // near side the 3 m wall hides it, from the back of the cell it does not.
     let scene = Arc::new(Scene::from_objects(vec![
-        block(10.5, -100.0, 11.0, 100.0, 3.0),
-        block(50.0, 4.0, 60.0, 6.0, 30.0),
+        Object::rect_block(10.5, -100.0, 11.0, 100.0, 3.0),
+        Object::rect_block(50.0, 4.0, 60.0, 6.0, 30.0),
     ]));
     let c = cell(-15.0, 0.0, 10.0, 10.0);
     let vs = sampled_visible(&scene, &c, 6);
@@ -76,7 +76,7 @@ fn tower_seen_from_the_back_of_the_cell_over_a_low_wall() {
 fn courtyard_is_hidden_from_outside() {
     // A closed block of four touching 12 m deep wings around a courtyard: the yard (a
     // street object) is hidden from a cell in the street outside, the block visible.
-    let ring = |x0: f64, y0: f64, x1: f64, y1: f64| block(x0, y0, x1, y1, 15.0);
+    let ring = |x0: f64, y0: f64, x1: f64, y1: f64| Object::rect_block(x0, y0, x1, y1, 15.0);
     let scene = Arc::new(Scene::from_objects(vec![
         ring(20.0, -10.0, 68.0, 2.0),
         ring(20.0, 28.0, 68.0, 40.0),
@@ -101,7 +101,7 @@ fn touching_buildings_fuse() {
     // they all vanish; fused they form a 30 m block that still hides the one behind.
     let mut objs: Vec<_> = (0..5)
         .map(|i| {
-            block(
+            Object::rect_block(
                 20.0,
                 -15.0 + 6.0 * i as f64,
                 32.0,
@@ -110,7 +110,7 @@ fn touching_buildings_fuse() {
             )
         })
         .collect();
-    objs.push(block(40.0, -3.0, 48.0, 3.0, 10.0));
+    objs.push(Object::rect_block(40.0, -3.0, 48.0, 3.0, 10.0));
     let scene = Arc::new(Scene::from_objects(objs));
     let c = cell(0.0, -5.0, 10.0, 5.0);
     for m in ["erosion", "erosion-segment", "erosion-cell"] {
@@ -126,10 +126,10 @@ fn touching_buildings_fuse() {
 #[test]
 fn one_metre_slit_lets_the_street_through() {
     let scene = Arc::new(Scene::from_objects(vec![
-        block(20.0, -40.0, 30.0, -0.5, 20.0),
-        block(20.0, 0.5, 30.0, 40.0, 20.0),
+        Object::rect_block(20.0, -40.0, 30.0, -0.5, 20.0),
+        Object::rect_block(20.0, 0.5, 30.0, 40.0, 20.0),
         street(30.0, -2.0, 200.0, 2.0),
-        block(100.0, -1.0, 104.0, 1.0, 6.0),
+        Object::rect_block(100.0, -1.0, 104.0, 1.0, 6.0),
     ]));
     let c = cell(0.0, -5.0, 10.0, 5.0);
     let vs = sampled_visible(&scene, &c, 5);
@@ -161,11 +161,11 @@ fn cells_touching_and_overlapping_facades() {
 fn objects_straddling_cell_borders() {
     // Long blocks crossing the cell's x and y ranges: split into side and corner pieces.
     let scene = Arc::new(Scene::from_objects(vec![
-        block(12.0, -30.0, 16.0, 40.0, 10.0),
-        block(-30.0, 12.0, 40.0, 15.0, 10.0),
-        block(30.0, -5.0, 34.0, 30.0, 25.0),
+        Object::rect_block(12.0, -30.0, 16.0, 40.0, 10.0),
+        Object::rect_block(-30.0, 12.0, 40.0, 15.0, 10.0),
+        Object::rect_block(30.0, -5.0, 34.0, 30.0, 25.0),
         street(-50.0, 3.0, 50.0, 7.0),
-        block(-20.0, -20.0, -12.0, -12.0, 9.0),
+        Object::rect_block(-20.0, -20.0, -12.0, -12.0, 9.0),
     ]));
     for c in [cell(0.0, 0.0, 10.0, 10.0), cell(2.0, 2.0, 8.0, 8.0)] {
         assert_conservative(&scene, &c);

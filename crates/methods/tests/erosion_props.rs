@@ -58,7 +58,7 @@ proptest! {
     /// height field is at least `e` — (H ⊖ X)(v) ≥ E(p), whatever the pixel size.
     #[test]
     fn eroded_raster_is_inside_the_exact_erosion(boxes in rects(), (el, half) in elements()) {
-        let objs: Vec<Object> = boxes.iter().map(|&(x0, y0, x1, y1, h)| block(x0, y0, x1, y1, h)).collect();
+        let objs: Vec<Object> = boxes.iter().map(|&(x0, y0, x1, y1, h)| Object::rect_block(x0, y0, x1, y1, h)).collect();
         let field = HeightField::build(&Scene::from_objects(objs));
         let e = erode(&field.g, el, half);
         let xs = el.vertices(half);
@@ -91,11 +91,11 @@ proptest! {
     #[test]
     fn a_cut_box_erodes_like_the_whole((x0, y0, w, h) in (0.0..5.0f64, 0.0..5.0f64, 12.0..30.0f64, 12.0..30.0f64),
                                       cut in 0.2..0.8f64, (el, half) in elements()) {
-        let whole = HeightField::build(&Scene::from_objects(vec![block(x0, y0, x0 + w, y0 + h, 20.0)]));
+        let whole = HeightField::build(&Scene::from_objects(vec![Object::rect_block(x0, y0, x0 + w, y0 + h, 20.0)]));
         let xc = x0 + w * cut;
         let parts = HeightField::build(&Scene::from_objects(vec![
-            block(x0, y0, xc, y0 + h, 20.0),
-            block(xc, y0, x0 + w, y0 + h, 20.0),
+            Object::rect_block(x0, y0, xc, y0 + h, 20.0),
+            Object::rect_block(xc, y0, x0 + w, y0 + h, 20.0),
         ]));
         let (a, b) = (erode(&whole.g, el, half), erode(&parts.g, el, half));
         let count = |g: &sightline_methods::erosion::field::Grid| g.data.iter().filter(|&&v| v > 0).count();
@@ -170,7 +170,7 @@ proptest! {
     /// missed = 0 for the four methods on random cities, and Fig. 9 ordering.
     #[test]
     fn conservative_on_random_cities((houses, (cx, cy, size)) in city()) {
-        let mut objs: Vec<_> = houses.iter().map(|&(x0, y0, x1, y1, h)| block(x0, y0, x1, y1, h)).collect();
+        let mut objs: Vec<_> = houses.iter().map(|&(x0, y0, x1, y1, h)| Object::rect_block(x0, y0, x1, y1, h)).collect();
         objs.push(street(30.0, -10.0, 42.0, 130.0));
         objs.push(street(-10.0, 72.0, 130.0, 84.0));
         let scene = Arc::new(Scene::from_objects(objs));

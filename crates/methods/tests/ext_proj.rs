@@ -10,15 +10,6 @@ use sightline_methods::{create, MethodOptions, VisibilityMethod};
 use sightline_scene::{Object, Scene};
 use std::sync::Arc;
 
-fn block(x0: f64, y0: f64, x1: f64, y1: f64, h: f64) -> Object {
-    Object::block(
-        None,
-        Polygon::rect(DVec2::new(x0, y0), DVec2::new(x1, y1)),
-        0.0,
-        h,
-    )
-}
-
 fn cell(s: &str) -> ViewCell {
     s.parse().expect("fixture cell")
 }
@@ -40,10 +31,10 @@ fn assert_conservative(scene: &Arc<Scene>, c: &ViewCell, p: &[u32]) {
 /// 60 m tower rises behind it.
 fn wall_scene() -> Arc<Scene> {
     Arc::new(Scene::from_objects(vec![
-        block(20.0, -20.0, 21.0, 20.0, 10.0), // 0 wall
-        block(30.0, -5.0, 40.0, 5.0, 6.0),    // 1 low building behind
-        block(45.0, -5.0, 55.0, 5.0, 60.0),   // 2 tower behind
-        block(-30.0, -5.0, -20.0, 5.0, 6.0),  // 3 in the open, behind the cell
+        Object::rect_block(20.0, -20.0, 21.0, 20.0, 10.0), // 0 wall
+        Object::rect_block(30.0, -5.0, 40.0, 5.0, 6.0),    // 1 low building behind
+        Object::rect_block(45.0, -5.0, 55.0, 5.0, 60.0),   // 2 tower behind
+        Object::rect_block(-30.0, -5.0, -20.0, 5.0, 6.0),  // 3 in the open, behind the cell
     ]))
 }
 
@@ -83,10 +74,10 @@ fn touching_buildings_fuse_into_one_occluder() {
     let mut objs: Vec<Object> = (0..8)
         .map(|i| {
             let y = -20.0 + 5.0 * i as f64;
-            block(20.0, y, 28.0, y + 5.0, 12.0 + (i % 3) as f64)
+            Object::rect_block(20.0, y, 28.0, y + 5.0, 12.0 + (i % 3) as f64)
         })
         .collect();
-    objs.push(block(35.0, -4.0, 45.0, 4.0, 8.0)); // 8 behind the row
+    objs.push(Object::rect_block(35.0, -4.0, 45.0, 4.0, 8.0)); // 8 behind the row
     let scene = Arc::new(Scene::from_objects(objs));
     let c = cell("0,-3,1.5,6,3,2");
     let p = pvs(&scene, &c, Params::default());
@@ -98,10 +89,10 @@ fn touching_buildings_fuse_into_one_occluder() {
 #[test]
 fn one_metre_slit_keeps_what_is_behind_visible() {
     let scene = Arc::new(Scene::from_objects(vec![
-        block(20.0, -20.0, 21.0, -0.5, 10.0), // 0
-        block(20.0, 0.5, 21.0, 20.0, 10.0),   // 1
-        block(40.0, -1.0, 42.0, 1.0, 5.0),    // 2 seen through the slit
-        block(40.0, 10.0, 45.0, 15.0, 5.0),   // 3 hidden off-axis
+        Object::rect_block(20.0, -20.0, 21.0, -0.5, 10.0), // 0
+        Object::rect_block(20.0, 0.5, 21.0, 20.0, 10.0),   // 1
+        Object::rect_block(40.0, -1.0, 42.0, 1.0, 5.0),    // 2 seen through the slit
+        Object::rect_block(40.0, 10.0, 45.0, 15.0, 5.0),   // 3 hidden off-axis
     ]));
     let c = cell("0,-1,1.5,2,1,2");
     let p = pvs(&scene, &c, Params::default());
@@ -121,8 +112,8 @@ fn courtyard_hides_the_outside() {
         .push(Polygon::rect(DVec2::new(-10.0, -10.0), DVec2::new(10.0, 10.0)).exterior);
     let scene = Arc::new(Scene::from_objects(vec![
         Object::block(None, ring, 0.0, 15.0), // 0 the courtyard building
-        block(40.0, -5.0, 50.0, 5.0, 10.0),   // 1 outside, lower
-        block(-5.0, 40.0, 5.0, 50.0, 60.0),   // 2 outside, a tall tower
+        Object::rect_block(40.0, -5.0, 50.0, 5.0, 10.0), // 1 outside, lower
+        Object::rect_block(-5.0, 40.0, 5.0, 50.0, 60.0), // 2 outside, a tall tower
     ]));
     let c = cell("-3,-3,1.5,3,3,2");
     let p = pvs(&scene, &c, Params::default());
@@ -140,10 +131,10 @@ fn courtyard_hides_the_outside() {
 #[test]
 fn cells_touching_and_overlapping_a_facade() {
     let scene = Arc::new(Scene::from_objects(vec![
-        block(0.0, 10.0, 50.0, 20.0, 12.0), // 0 facade along the street at y = 10
-        block(0.0, -20.0, 50.0, -5.0, 12.0), // 1 other side of the street
-        block(60.0, 0.0, 70.0, 8.0, 6.0),   // 2 down the street, in view
-        block(10.0, 25.0, 20.0, 35.0, 8.0), // 3 behind the facade
+        Object::rect_block(0.0, 10.0, 50.0, 20.0, 12.0), // 0 facade along the street at y = 10
+        Object::rect_block(0.0, -20.0, 50.0, -5.0, 12.0), // 1 other side of the street
+        Object::rect_block(60.0, 0.0, 70.0, 8.0, 6.0),   // 2 down the street, in view
+        Object::rect_block(10.0, 25.0, 20.0, 35.0, 8.0), // 3 behind the facade
     ]));
     for s in ["10,0,1.5,20,10,2", "10,2,1.5,20,12,2"] {
         let c = cell(s);

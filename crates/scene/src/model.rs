@@ -114,6 +114,17 @@ impl Object {
         Self::blocks(name, vec![Prism::new(footprint.normalized(), base, top)])
     }
 
+    /// An axis-aligned box building on the ground: footprint `[x0, x1] × [y0, y1]`, top
+    /// at `height` (fixtures and tests).
+    pub fn rect_block(x0: f64, y0: f64, x1: f64, y1: f64, height: f64) -> Self {
+        Self::block(
+            None,
+            Polygon::rect(DVec2::new(x0, y0), DVec2::new(x1, y1)),
+            0.0,
+            height,
+        )
+    }
+
     /// A multi-prism building: inner = outer = the prisms.
     pub fn blocks(name: Option<String>, prisms: Vec<Prism>) -> Self {
         let bounds = prisms.iter().fold(Aabb3::EMPTY, |b, p| b.union(p.aabb()));

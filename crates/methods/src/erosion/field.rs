@@ -543,15 +543,6 @@ mod tests {
     use super::*;
     use sightline_scene::Object;
 
-    fn block(x0: f64, y0: f64, x1: f64, y1: f64, h: f64) -> Object {
-        Object::block(
-            None,
-            Polygon::rect(DVec2::new(x0, y0), DVec2::new(x1, y1)),
-            0.0,
-            h,
-        )
-    }
-
     fn field(objs: Vec<Object>) -> HeightField {
         HeightField::build(&Scene::from_objects(objs))
     }
@@ -566,8 +557,8 @@ mod tests {
     fn touching_blocks_fuse_without_a_crack() {
         // Two blocks sharing the wall x = 10.2 (not on a pixel edge), heights 20 and 15.
         let f = field(vec![
-            block(0.0, 0.0, 10.2, 10.0, 20.0),
-            block(10.2, 0.0, 20.0, 10.0, 15.0),
+            Object::rect_block(0.0, 0.0, 10.2, 10.0, 20.0),
+            Object::rect_block(10.2, 0.0, 20.0, 10.0, 15.0),
         ]);
         assert_eq!(at(&f.g, 5.0, 5.0), 200);
         assert_eq!(at(&f.g, 15.0, 5.0), 150);
@@ -581,8 +572,8 @@ mod tests {
     #[test]
     fn inner_raster_never_exceeds_the_height_field() {
         let f = field(vec![
-            block(0.3, 0.7, 7.9, 5.2, 12.0),
-            block(7.9, 1.0, 9.0, 3.0, 30.0),
+            Object::rect_block(0.3, 0.7, 7.9, 5.2, 12.0),
+            Object::rect_block(7.9, 1.0, 9.0, 3.0, 30.0),
         ]);
         for j in 0..f.g.ny {
             for i in 0..f.g.nx {
@@ -605,10 +596,10 @@ mod tests {
     fn courtyard_escape_height_is_the_lowest_wall() {
         // A ring of buildings 10 m deep around a 20 m courtyard, one wing lower (12 m).
         let f = field(vec![
-            block(0.0, 0.0, 40.0, 10.0, 20.0),
-            block(0.0, 30.0, 40.0, 40.0, 20.0),
-            block(0.0, 10.0, 10.0, 30.0, 20.0),
-            block(30.0, 10.0, 40.0, 30.0, 12.0),
+            Object::rect_block(0.0, 0.0, 40.0, 10.0, 20.0),
+            Object::rect_block(0.0, 30.0, 40.0, 40.0, 20.0),
+            Object::rect_block(0.0, 10.0, 10.0, 30.0, 20.0),
+            Object::rect_block(30.0, 10.0, 40.0, 30.0, 12.0),
         ]);
         assert_eq!(at(&f.g, 20.0, 20.0), 0);
         assert_eq!(at(&f.escape, 20.0, 20.0), 120);

@@ -532,15 +532,6 @@ mod tests {
     use sightline_geom::Polygon;
     use sightline_scene::Object;
 
-    fn block(x0: f64, y0: f64, x1: f64, y1: f64, h: f64) -> Object {
-        Object::block(
-            None,
-            Polygon::rect(DVec2::new(x0, y0), DVec2::new(x1, y1)),
-            0.0,
-            h,
-        )
-    }
-
     #[test]
     fn frustum_of_a_direction() {
         let lc = Direction::PosX.box_to_local(DVec3::ZERO, DVec3::new(10.0, 10.0, 2.0));
@@ -561,10 +552,10 @@ mod tests {
     #[test]
     fn planes_are_chosen_by_the_occludees_they_hide() {
         let scene = Arc::new(Scene::from_objects(vec![
-            block(-60.0, 12.0, 18.0, 30.0, 10.0), // 0 street front, left of the gap
-            block(22.0, 12.0, 100.0, 30.0, 10.0), // 1 street front, right of the gap
-            block(-200.0, 40.0, 240.0, 45.0, 20.0), // 2 solid wall behind
-            block(15.0, 60.0, 25.0, 70.0, 8.0),   // 3 behind the wall
+            Object::rect_block(-60.0, 12.0, 18.0, 30.0, 10.0), // 0 street front, left of the gap
+            Object::rect_block(22.0, 12.0, 100.0, 30.0, 10.0), // 1 street front, right of the gap
+            Object::rect_block(-200.0, 40.0, 240.0, 45.0, 20.0), // 2 solid wall behind
+            Object::rect_block(15.0, 60.0, 25.0, 70.0, 8.0),   // 3 behind the wall
         ]));
         let params = Params {
             adaptive_budget: None,
@@ -614,7 +605,7 @@ mod tests {
             vec![],
         );
         let scene = Arc::new(Scene::from_objects(vec![
-            block(-200.0, 40.0, 240.0, 45.0, 12.0),
+            Object::rect_block(-200.0, 40.0, 240.0, 45.0, 12.0),
             Object::block(None, diamond, 0.0, 13.0),
         ]));
         let ext = ExtProj::new(scene.clone(), Params::default());

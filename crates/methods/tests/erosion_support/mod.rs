@@ -12,15 +12,6 @@ pub const METHODS: [&str; 4] = [
     "shrink-sphere",
 ];
 
-pub fn block(x0: f64, y0: f64, x1: f64, y1: f64, h: f64) -> Object {
-    Object::block(
-        None,
-        Polygon::rect(DVec2::new(x0, y0), DVec2::new(x1, y1)),
-        0.0,
-        h,
-    )
-}
-
 pub fn street(x0: f64, y0: f64, x1: f64, y1: f64) -> Object {
     Object::flat(
         None,
