@@ -251,8 +251,8 @@ async fn walk_prefetches_neighbours_and_sends_deltas() {
     s.stop().await.unwrap();
 }
 
-#[tokio::test]
-async fn a_closed_session_withdraws_what_it_waited_for() {
+/// A server over a 6 × 6 block city with a single (slow) worker computing the PVS.
+async fn one_slow_worker_server() -> (TestServer, Arc<sightline_scene::Scene>) {
     let scene = Arc::new(block_city(6));
     let src = near_source(scene.clone(), 50.0, 30.0, 100);
     let config = ServerConfig {
@@ -262,7 +262,12 @@ async fn a_closed_session_withdraws_what_it_waited_for() {
         },
         ..Default::default()
     };
-    let s = TestServer::start(scene.clone(), src, config).await;
+    (TestServer::start(scene.clone(), src, config).await, scene)
+}
+
+#[tokio::test]
+async fn a_closed_session_withdraws_what_it_waited_for() {
+    let (s, _) = one_slow_worker_server().await;
     let mut ws = ws_connect(s.addr, "").await;
     assert_eq!(ws_next(&mut ws).await.unwrap().unwrap()["type"], "welcome");
     ws_send(
@@ -295,16 +300,7 @@ async fn a_closed_session_withdraws_what_it_waited_for() {
 #[tokio::test]
 async fn a_jump_withdraws_the_prefetches_left_behind() {
     // One slow worker: the old neighbourhood's prefetches are still queued at the jump.
-    let scene = Arc::new(block_city(6));
-    let src = near_source(scene.clone(), 50.0, 30.0, 100);
-    let config = ServerConfig {
-        cache: sightline_server::cache::CacheConfig {
-            workers: 1,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
-    let s = TestServer::start(scene.clone(), src, config).await;
+    let (s, scene) = one_slow_worker_server().await;
     let mut ws = ws_connect(s.addr, "").await;
     let mut c = ClientState::default();
     assert_eq!(c.apply(&ws_next(&mut ws).await.unwrap()), "welcome");
