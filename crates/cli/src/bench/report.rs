@@ -56,8 +56,11 @@ impl Report {
             }
         ));
         md.push_str(&format!(
-            "Settings: seed {}, {} cells per setting, timings are the median of {} runs per cell (single thread per cell); ground truth with the default `TruthOptions`. Raw figures: `raw.json`.\n\n",
-            suite.seed, suite.cells_per_setting, suite.timing_repeats
+            "Settings: seed {}, {} cells per setting, timings are the median of {} runs per cell (a run over {} ms is not repeated; single thread per cell); ground truth with the default `TruthOptions`. Raw figures: `raw.json`.\n\n",
+            suite.seed,
+            suite.cells_per_setting,
+            suite.timing_repeats,
+            super::experiments::NO_REPEAT_MS
         ));
         Report { md }
     }
@@ -91,9 +94,16 @@ impl Report {
         self.md.push('\n');
     }
 
-    pub fn footer(&mut self, seconds: f64) {
-        self.md
-            .push_str(&format!("---\nSuite ran in {:.0} s.\n", seconds));
+    /// The closing line: the whole suite's wall time and each experiment's.
+    pub fn footer(&mut self, seconds: f64, parts: &[(&str, f64)]) {
+        let parts: Vec<String> = parts
+            .iter()
+            .map(|(name, s)| format!("{name} {s:.0} s"))
+            .collect();
+        self.md.push_str(&format!(
+            "---\nSuite ran in {seconds:.0} s ({}).\n",
+            parts.join(", ")
+        ));
     }
 
     pub fn markdown(&self) -> String {
