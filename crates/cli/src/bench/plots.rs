@@ -10,10 +10,44 @@ pub struct Series {
 }
 
 /// Axis scaling of a chart.
-#[derive(Clone, Copy, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Scale {
     Linear,
     Log,
+}
+
+/// The label of an axis tick: `1 200`-style integers, two significant digits below 10;
+/// on a log axis only the ticks at 1, 2 and 5 × 10^k are labelled (the others crowd).
+fn tick(v: f64, scale: Scale) -> String {
+    if !v.is_finite() {
+        return String::new();
+    }
+    if scale == Scale::Log && v > 0.0 {
+        let m = v / 10f64.powf(v.log10().floor());
+        if ![1.0, 2.0, 5.0, 10.0]
+            .iter()
+            .any(|k| (m - k).abs() < 1e-6 * k)
+        {
+            return String::new();
+        }
+    }
+    if v.abs() >= 10.0 || (v.fract() == 0.0 && v.abs() >= 1.0) {
+        let n = v.round() as i64;
+        let digits = n.unsigned_abs().to_string();
+        let mut out = String::new();
+        for (i, c) in digits.chars().enumerate() {
+            if i > 0 && (digits.len() - i) % 3 == 0 {
+                out.push(' ');
+            }
+            out.push(c);
+        }
+        if n < 0 {
+            out.insert(0, '-');
+        }
+        out
+    } else {
+        format!("{v:.2}")
+    }
 }
 
 /// Draw `series` as lines with markers into a 900×560 PNG.
@@ -73,10 +107,14 @@ pub fn line_chart(
                 .x_label_area_size(44)
                 .y_label_area_size(64)
                 .build_cartesian_2d($xr, $yr)?;
+            let fx = |v: &f64| tick(*v, x_scale);
+            let fy = |v: &f64| tick(*v, y_scale);
             chart
                 .configure_mesh()
                 .x_desc(x_label)
                 .y_desc(y_label)
+                .x_label_formatter(&fx)
+                .y_label_formatter(&fy)
                 .label_style(("sans-serif", 14))
                 .draw()?;
             for (i, s) in series.iter().enumerate() {
@@ -112,4 +150,49 @@ pub fn line_chart(
     }
     root.present()?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks() {
+        assert_eq!(tick(10_000.0, Scale::Log), "10 000");
+        assert_eq!(tick(9_000.0, Scale::Log), "");
+        assert_eq!(tick(200.0, Scale::Log), "200");
+        assert_eq!(tick(90.0, Scale::Log), "");
+        assert_eq!(tick(0.5, Scale::Log), "0.50");
+        assert_eq!(tick(2.0, Scale::Linear), "2");
+        assert_eq!(tick(2.5, Scale::Linear), "2.50");
+        assert_eq!(tick(150_000.0, Scale::Linear), "150 000");
+        assert_eq!(tick(-12.0, Scale::Linear), "-12");
+    }
+
+    #[test]
+    fn draws_a_log_log_chart() {
+        let dir = std::env::temp_dir().join(format!("sightline-plot-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("scaling.png");
+        let series = vec![Series {
+            name: "dual-ray".into(),
+            points: vec![(1_000.0, 5.6), (10_000.0, 36.9), (150_000.0, 420.0)],
+        }];
+        line_chart(
+            &path,
+            "t",
+            "buildings",
+            "ms",
+            &series,
+            Scale::Log,
+            Scale::Log,
+        )
+        .unwrap();
+        let img = image::open(&path).unwrap();
+        assert_eq!((img.width(), img.height()), (900, 560));
+        assert!(line_chart(&path, "t", "x", "y", &[], Scale::Log, Scale::Log).is_err());
+        if std::env::var_os("SIGHTLINE_KEEP_PLOT").is_none() {
+            std::fs::remove_dir_all(&dir).ok();
+        }
+    }
 }
