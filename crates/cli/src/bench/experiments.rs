@@ -83,7 +83,7 @@ impl Suite {
                 seed: 1,
                 city_buildings: 500,
                 cell_sizes_m: vec![10.0, 25.0, 50.0, 100.0, 200.0],
-                cells_per_setting: 20,
+                cells_per_setting: 10,
                 timing_repeats: 5,
                 metropolis_buildings: 150_000,
                 dual_ray_cell_sizes_m: vec![50.0, 100.0, 300.0],
@@ -838,25 +838,49 @@ pub fn run(
     }
     let machine = Machine::detect();
     let mut rep = Report::new(&suite, &machine);
+    type Experiment<'a> = Box<dyn FnOnce(&mut Bench, &mut Report) -> anyhow::Result<()> + 'a>;
+    let experiments: Vec<(&str, Experiment)> = vec![
+        ("Fig. 9", Box::new(|b, r| fig9(b, &scenes, r, out))),
+        (
+            "side by side",
+            Box::new(|b, r| side_by_side(b, &scenes, &names, r)),
+        ),
+        ("Table 1", Box::new(|b, r| table1(b, r, out))),
+        (
+            "Fig. 12 + sweep",
+            Box::new(|b, r| ext_proj(b, &scenes[0], r, out)),
+        ),
+        ("scaling", Box::new(|b, r| scaling(b, &names, r, out))),
+    ];
+    let total = experiments.len();
     let mut parts: Vec<(&str, f64)> = Vec::new();
-    let mut timed = |name, t: Instant| parts.push((name, t.elapsed().as_secs_f64()));
-    let t = Instant::now();
-    fig9(&mut b, &scenes, &mut rep, out)?;
-    timed("Fig. 9", t);
-    let t = Instant::now();
-    side_by_side(&mut b, &scenes, &names, &mut rep)?;
-    timed("side by side", t);
-    let t = Instant::now();
-    table1(&mut b, &mut rep, out)?;
-    timed("Table 1", t);
-    let t = Instant::now();
-    ext_proj(&mut b, &scenes[0], &mut rep, out)?;
-    timed("Fig. 12 + sweep", t);
-    let t = Instant::now();
-    scaling(&mut b, &names, &mut rep, out)?;
-    timed("scaling", t);
+    for (name, run) in experiments {
+        let t = Instant::now();
+        run(&mut b, &mut rep)?;
+        parts.push((name, t.elapsed().as_secs_f64()));
+        // Written after every experiment: a long suite that is stopped keeps what it did.
+        let done = parts.len() == total;
+        write_report(&suite, &machine, &b, &rep, started, &parts, done, out)?;
+    }
+    Ok(())
+}
+
+/// `out/README.md` (with the notes and the footer) and `out/raw.json` as they stand;
+/// `done` is false while experiments remain.
+#[allow(clippy::too_many_arguments)]
+fn write_report(
+    suite: &Suite,
+    machine: &Machine,
+    b: &Bench,
+    rep: &Report,
+    started: Instant,
+    parts: &[(&str, f64)],
+    done: bool,
+    out: &Path,
+) -> anyhow::Result<()> {
+    let mut rep = rep.clone();
     rep.notes(&b.notes);
-    rep.footer(started.elapsed().as_secs_f64(), &parts);
+    rep.footer(started.elapsed().as_secs_f64(), parts, done);
     crate::common::write_atomic(&out.join("README.md"), rep.markdown().as_bytes())?;
     #[derive(Serialize)]
     struct Raw<'a> {
@@ -866,11 +890,65 @@ pub fn run(
         notes: &'a [String],
     }
     let raw = serde_json::to_vec_pretty(&Raw {
-        suite: &suite,
-        machine: &machine,
+        suite,
+        machine,
         records: &b.records,
         notes: &b.notes,
     })?;
     crate::common::write_atomic(&out.join("raw.json"), &raw)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The whole pipeline on scenes small enough for a unit test: every experiment
+    /// writes its section, every conservative record has `missed == 0`, and the
+    /// report ends with the timed footer.
+    #[test]
+    fn a_tiny_suite_writes_a_complete_report() {
+        let suite = Suite {
+            name: "tiny".into(),
+            seed: 3,
+            city_buildings: 40,
+            cell_sizes_m: vec![25.0],
+            cells_per_setting: 1,
+            timing_repeats: 1,
+            metropolis_buildings: 200,
+            dual_ray_cell_sizes_m: vec![50.0],
+            dual_ray_resolutions: vec![16, 32],
+            ext_proj_resolutions: vec![64],
+            forest_trees: 6,
+            sweep_planes: vec![1],
+            scaling_buildings: vec![100, 200],
+            truth_samples: Some(8),
+            truth_resolution_px: Some(64),
+        };
+        let dir = std::env::temp_dir().join(format!("sightline-bench-{}", std::process::id()));
+        let methods = vec!["dual-ray".to_string(), "dual-ray-exact".to_string()];
+        run(suite, &[], Some(methods), &dir, true).unwrap();
+        let md = std::fs::read_to_string(dir.join("README.md")).unwrap();
+        for section in [
+            "Fig. 9",
+            "All methods on the same cells",
+            "Table 1",
+            "Fig. 12",
+            "Scaling",
+        ] {
+            assert!(md.contains(section), "missing section {section}:\n{md}");
+        }
+        assert!(md.contains("Suite ran in"), "{md}");
+        assert!(dir.join("table1-time.png").exists());
+        let raw: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("raw.json")).unwrap()).unwrap();
+        let records = raw["records"].as_array().unwrap();
+        assert!(!records.is_empty());
+        for r in records {
+            if let Some(m) = r["missed"].as_u64() {
+                assert_eq!(m, 0, "{r}");
+            }
+        }
+        std::fs::remove_dir_all(&dir).ok();
+    }
 }

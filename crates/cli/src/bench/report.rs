@@ -35,6 +35,7 @@ impl Table {
 }
 
 /// The report being written.
+#[derive(Clone)]
 pub struct Report {
     md: String,
 }
@@ -95,13 +96,19 @@ impl Report {
     }
 
     /// The closing line: the whole suite's wall time and each experiment's.
-    pub fn footer(&mut self, seconds: f64, parts: &[(&str, f64)]) {
+    /// `done` is false for a report written while experiments remain.
+    pub fn footer(&mut self, seconds: f64, parts: &[(&str, f64)], done: bool) {
         let parts: Vec<String> = parts
             .iter()
             .map(|(name, s)| format!("{name} {s:.0} s"))
             .collect();
+        let what = if done {
+            "Suite ran in"
+        } else {
+            "Partial report (still running):"
+        };
         self.md.push_str(&format!(
-            "---\nSuite ran in {seconds:.0} s ({}).\n",
+            "---\n{what} {seconds:.0} s ({}).\n",
             parts.join(", ")
         ));
     }
