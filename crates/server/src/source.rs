@@ -5,10 +5,12 @@
 //! Both sit behind [`PvsSource`]; the server puts a cache and a worker pool in front
 //! ([`crate::cache`]) and never asks a source about anything but cells it located itself.
 
-use crate::grid::{CellGrid, CellId, PointError};
+use crate::grid::{CellGrid, CellId, PointError, MAX_CELLS};
 use serde::Serialize;
 use sightline_geom::{DVec2, DVec3, ViewCell};
 use sightline_methods::VisibilityMethod;
+use sightline_pvs::PvsFile;
+use sightline_scene::Scene;
 use std::sync::Arc;
 
 /// What a source says about itself (shown in `/api/scene`).
@@ -100,5 +102,213 @@ impl PvsSource for OnlineSource {
     }
 }
 
+/// File source: the sets of a `.pvs` built beforehand (`sightline build`) over a regular
+/// grid of square cells — what `sightline cells` writes. Grid cells the file lacks (the
+/// grid's cells inside buildings, which `cells` drops) answer [`SourceError::NoCell`].
+pub struct FileSource {
+    file: PvsFile,
+    grid: CellGrid,
+    /// Grid cell id → index of the file's cell.
+    index: Vec<Option<u32>>,
+}
+
+/// Why a `.pvs` file cannot be served.
+#[derive(Debug, thiserror::Error)]
+pub enum FileSourceError {
+    #[error(transparent)]
+    Pvs(#[from] sightline_pvs::PvsError),
+    #[error("the file is shard {0}/{1}: merge the shards first (`sightline merge`)")]
+    Shard(u32, u32),
+    #[error("the file has no cells")]
+    Empty,
+    #[error("cell {0} ({1}) is not a square of the grid of cell 0 ({2}): serving needs the regular grid of `sightline cells`")]
+    NotAGrid(usize, ViewCell, ViewCell),
+    #[error("{0} grid cells would be needed (at most {MAX_CELLS})")]
+    TooMany(u64),
+}
+
+impl FileSource {
+    /// Open `file` for `scene`: it must have been built for this scene (fingerprint), be
+    /// complete (not a shard) and hold cells of one regular grid.
+    pub fn new(file: PvsFile, scene: &Scene) -> Result<Self, FileSourceError> {
+        file.check_scene(scene)?;
+        if let Some(sh) = &file.header().shard {
+            return Err(FileSourceError::Shard(sh.index, sh.count));
+        }
+        let cells = file.cells();
+        let first = *cells.first().ok_or(FileSourceError::Empty)?;
+        let size = first.max.x - first.min.x;
+        let tol = 1e-6 * size.abs().max(1.0);
+        let (mut x0, mut y0) = (f64::INFINITY, f64::INFINITY);
+        let (mut x1, mut y1) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
+        for (i, c) in cells.iter().enumerate() {
+            let square = size > 0.0
+                && ((c.max.x - c.min.x) - size).abs() <= tol
+                && ((c.max.y - c.min.y) - size).abs() <= tol
+                && (c.min.z - first.min.z).abs() <= tol
+                && (c.max.z - first.max.z).abs() <= tol;
+            if !square {
+                return Err(FileSourceError::NotAGrid(i, *c, first));
+            }
+            x0 = x0.min(c.min.x);
+            y0 = y0.min(c.min.y);
+            x1 = x1.max(c.max.x);
+            y1 = y1.max(c.max.y);
+        }
+        let nx = ((x1 - x0) / size).round();
+        let ny = ((y1 - y0) / size).round();
+        let total = nx * ny;
+        if total.is_nan() || total > MAX_CELLS as f64 {
+            return Err(FileSourceError::TooMany(total as u64));
+        }
+        let (nx, ny) = (nx as u32, ny as u32);
+        let mut index = vec![None; nx as usize * ny as usize];
+        for (i, c) in cells.iter().enumerate() {
+            let fx = (c.min.x - x0) / size;
+            let fy = (c.min.y - y0) / size;
+            let (ix, iy) = (fx.round(), fy.round());
+            let aligned = (fx - ix).abs() * size <= tol && (fy - iy).abs() * size <= tol;
+            let id = iy as usize * nx as usize + ix as usize;
+            if !aligned || ix >= nx as f64 || iy >= ny as f64 || index[id].is_some() {
+                return Err(FileSourceError::NotAGrid(i, *c, first));
+            }
+            index[id] = Some(i as u32);
+        }
+        let grid = CellGrid {
+            origin: [x0, y0],
+            cell_size_m: size,
+            nx,
+            ny,
+            z_range_m: [first.min.z, first.max.z],
+            top_m: scene.bounds.max.z.max(first.max.z),
+        };
+        Ok(FileSource { file, grid, index })
+    }
+}
+
+impl PvsSource for FileSource {
+    fn info(&self) -> SourceInfo {
+        let h = self.file.header();
+        SourceInfo {
+            kind: "file",
+            method: h.method.clone(),
+            // `sampled` and `all` are the only non-conservative names of SPEC §4 (`all`
+            // is conservative, if useless).
+            conservative: h.method != "sampled",
+            params: h.params.iter().map(|(k, v)| format!("{k}={v}")).collect(),
+        }
+    }
+
+    fn grid(&self) -> &CellGrid {
+        &self.grid
+    }
+
+    fn pvs(&self, id: CellId) -> Result<Vec<u32>, SourceError> {
+        let i = self
+            .index
+            .get(id as usize)
+            .copied()
+            .flatten()
+            .ok_or(SourceError::NoCell(id))?;
+        self.file
+            .pvs(i as usize)
+            .map_err(|e| SourceError::Method(e.to_string()))
+    }
+}
+
 /// Shared handle.
 pub type SharedSource = Arc<dyn PvsSource>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sightline_geom::DVec3;
+    use sightline_pvs::{build, BuildOptions};
+    use sightline_scene::generate::city;
+
+    /// Square 50 m cells over the scene, aligned on multiples of 50 m, minus `skip`.
+    fn grid_cells(scene: &Scene, skip: usize) -> Vec<ViewCell> {
+        let (b, s) = (scene.bounds, 50.0);
+        let (x0, y0) = ((b.min.x / s).floor() * s, (b.min.y / s).floor() * s);
+        let mut out = Vec::new();
+        let mut y = y0;
+        while y < b.max.y {
+            let mut x = x0;
+            while x < b.max.x {
+                out.push(ViewCell {
+                    min: DVec3::new(x, y, 1.5),
+                    max: DVec3::new(x + s, y + s, 2.0),
+                });
+                x += s;
+            }
+            y += s;
+        }
+        out.remove(skip);
+        out
+    }
+
+    fn built(scene: &Arc<Scene>, cells: &[ViewCell], name: &str) -> PvsFile {
+        let m = sightline_methods::create("dual-ray", scene.clone(), &Default::default()).unwrap();
+        let path =
+            std::env::temp_dir().join(format!("sightline-{name}-{}.pvs", std::process::id()));
+        build(
+            scene,
+            m.as_ref(),
+            cells,
+            &path,
+            &BuildOptions::default(),
+            &|_, _| {},
+        )
+        .unwrap();
+        let f = PvsFile::open(&path).unwrap();
+        std::fs::remove_file(&path).ok();
+        f
+    }
+
+    #[test]
+    fn a_file_source_answers_the_file_on_its_grid() {
+        let scene = Arc::new(city(3, 80));
+        let cells = grid_cells(&scene, 2);
+        let file = built(&scene, &cells, "grid");
+        let expected: Vec<Vec<u32>> = (0..cells.len()).map(|i| file.pvs(i).unwrap()).collect();
+        let src = FileSource::new(file, &scene).unwrap();
+        assert_eq!(src.info().kind, "file");
+        assert_eq!(src.info().method, "dual-ray");
+        assert_eq!(src.grid().len(), cells.len() + 1);
+        for (i, c) in cells.iter().enumerate() {
+            let id = src.locate(c.center()).unwrap();
+            assert_eq!(src.cell(id), Some(*c));
+            assert_eq!(src.pvs(id).unwrap(), expected[i]);
+        }
+        // The grid's cell the file lacks.
+        let missing = (0..src.grid().len() as u32)
+            .find(|&id| src.index[id as usize].is_none())
+            .unwrap();
+        assert_eq!(missing, 2);
+        assert_eq!(src.pvs(missing), Err(SourceError::NoCell(2)));
+    }
+
+    #[test]
+    fn a_file_of_another_scene_or_not_a_grid_is_refused() {
+        let scene = Arc::new(city(3, 80));
+        let cells = grid_cells(&scene, 0);
+        let other = city(4, 80);
+        let err = FileSource::new(built(&scene, &cells, "other"), &other)
+            .err()
+            .unwrap();
+        assert!(matches!(err, FileSourceError::Pvs(_)), "{err}");
+        let mut shifted = cells.clone();
+        shifted[1].min.x += 10.0;
+        shifted[1].max.x += 10.0;
+        let err = FileSource::new(built(&scene, &shifted, "shifted"), &scene)
+            .err()
+            .unwrap();
+        assert!(matches!(err, FileSourceError::NotAGrid(1, _, _)), "{err}");
+        let mut small = cells;
+        small[3].max.y -= 5.0;
+        let err = FileSource::new(built(&scene, &small, "small"), &scene)
+            .err()
+            .unwrap();
+        assert!(matches!(err, FileSourceError::NotAGrid(3, _, _)), "{err}");
+    }
+}

@@ -7,7 +7,7 @@ use anyhow::{bail, Context};
 use sightline_methods::MethodOptions;
 use sightline_server::cache::CacheConfig;
 use sightline_server::grid::CellGrid;
-use sightline_server::source::{OnlineSource, SharedSource};
+use sightline_server::source::{FileSource, OnlineSource, PvsSource, SharedSource};
 use sightline_server::{Server, ServerConfig};
 use std::io::Write;
 use std::sync::Arc;
@@ -39,10 +39,20 @@ pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
         bail!("{}: the scene has no objects", scene_arg.scene.display());
     }
     let source: SharedSource = match pvs {
-        Some(path) => bail!(
-            "{}: serving from a .pvs file is not available in this build yet; serve on-line with --method instead",
-            path.display()
-        ),
+        Some(path) => {
+            let file = sightline_pvs::PvsFile::open(&path)
+                .with_context(|| format!("cannot open {}", path.display()))?;
+            let src = FileSource::new(file, &scene)
+                .with_context(|| format!("cannot serve {}", path.display()))?;
+            let g = src.grid();
+            eprintln!(
+                "serving {}: {} grid cells of {} m (--method, --cell-size and --resolution come from the file)",
+                path.display(),
+                g.len(),
+                g.cell_size_m
+            );
+            Arc::new(src)
+        }
         None => {
             let grid = CellGrid::cover(&scene.bounds, cell_size).context("--cell-size")?;
             eprintln!(
