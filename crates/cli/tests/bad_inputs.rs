@@ -110,3 +110,53 @@ fn info_reports_real_scenes() {
         assert!(text.contains(&format!("objects:   {n}")), "{text}");
     }
 }
+
+#[test]
+fn serve_refuses_a_pvs_of_another_scene_or_a_broken_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    for (seed, name) in [("1", "a.geojson"), ("2", "b.geojson")] {
+        let (code, _, err) = sightline(&[
+            "generate",
+            "city",
+            "--seed",
+            seed,
+            "--size",
+            "40",
+            "-o",
+            &p(name),
+        ]);
+        assert_eq!(code, 0, "{err}");
+    }
+    let (code, _, err) = sightline(&[
+        "cells",
+        &p("a.geojson"),
+        "--size",
+        "100",
+        "-o",
+        &p("c.json"),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = sightline(&[
+        "build",
+        &p("a.geojson"),
+        "--cells",
+        &p("c.json"),
+        "--method",
+        "dual-ray",
+        "-o",
+        &p("a.pvs"),
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let bytes = std::fs::read(p("a.pvs")).unwrap();
+    std::fs::write(p("cut.pvs"), &bytes[..bytes.len() / 2]).unwrap();
+    for (scene, pvs) in [("b.geojson", "a.pvs"), ("a.geojson", "cut.pvs")] {
+        let (code, _, err) = sightline(&["serve", &p(scene), &p(pvs), "--addr", "127.0.0.1:0"]);
+        let lines: Vec<&str> = err.lines().collect();
+        assert!(
+            code == 1 && lines.len() == 1 && lines[0].starts_with("error: "),
+            "{scene} {pvs}: exit {code}, stderr {err:?}"
+        );
+    }
+}
