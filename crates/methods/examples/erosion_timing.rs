@@ -49,6 +49,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "erosion-segment",
         "erosion-cell",
         "shrink-sphere",
+        "erosion-rays",
     ] {
         let t = Instant::now();
         let method = create(m, scene.clone(), &MethodOptions::default())?;

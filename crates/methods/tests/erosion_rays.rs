@@ -118,13 +118,18 @@ fn city_case(seed: u64, k: usize) -> (Arc<Scene>, ViewCell) {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 12, ..ProptestConfig::default() })]
 
-    /// missed = 0 against the sampled ground truth on random generated cities.
+    /// missed = 0 against the sampled ground truth on random generated cities, at the
+    /// default number of azimuth bins and at a coarse 64 (conservative at any).
     #[test]
     fn rays_miss_nothing_on_generated_cities(seed in 0..1_000u64, k in 0..10_000usize) {
         let (scene, c) = city_case(seed, k);
         let ts = TruthScene::new(&scene);
-        let r = check_cell_prepared(&ts, rays(&scene).as_ref(), &c, &truth_opts()).expect("check");
-        prop_assert!(r.missed.is_empty(), "seed {seed} cell {c}: missed {:?}", r.missed);
+        let coarse = MethodOptions { resolution_px: Some(64), ..MethodOptions::default() };
+        for opts in [MethodOptions::default(), coarse] {
+            let m = create("erosion-rays", scene.clone(), &opts).expect("method");
+            let r = check_cell_prepared(&ts, m.as_ref(), &c, &truth_opts()).expect("check");
+            prop_assert!(r.missed.is_empty(), "seed {seed} cell {c} {opts:?}: missed {:?}", r.missed);
+        }
     }
 }
 
