@@ -1,5 +1,6 @@
 //! Phase timings of the erosion methods on a scene: `cargo run --release -p
-//! sightline-methods --example erosion_timing -- SCENE [CELL_SIZE] [CELLS]`.
+//! sightline-methods --example erosion_timing -- SCENE [CELL_SIZE] [CELLS] [METHODS]`
+//! (METHODS: comma-separated, default all five).
 
 use sightline_geom::{DVec2, ViewCell};
 use sightline_methods::{create, MethodOptions};
@@ -11,7 +12,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let path = args
         .get(1)
-        .ok_or("usage: erosion_timing SCENE [SIZE] [CELLS]")?;
+        .ok_or("usage: erosion_timing SCENE [SIZE] [CELLS] [METHODS]")?;
     let size: f64 = args.get(2).map_or(Ok(25.0), |s| s.parse())?;
     let count: usize = args.get(3).map_or(Ok(10), |s| s.parse())?;
     let t = Instant::now();
@@ -44,12 +45,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             ])?);
         }
     }
+    let only: Vec<String> = args
+        .get(4)
+        .map(|s| s.split(',').map(String::from).collect())
+        .unwrap_or_default();
     for m in [
         "erosion",
         "erosion-segment",
         "erosion-cell",
         "shrink-sphere",
+        "erosion-rays",
     ] {
+        if !only.is_empty() && !only.iter().any(|o| o == m) {
+            continue;
+        }
         let t = Instant::now();
         let method = create(m, scene.clone(), &MethodOptions::default())?;
         let prep = t.elapsed().as_secs_f64();

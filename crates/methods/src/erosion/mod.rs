@@ -3,7 +3,9 @@
 //! occludees shrunk), `erosion-segment` (method 3: segments, occludees as is),
 //! `erosion-cell` (method 2: occluders eroded by the cell) and `shrink-sphere`
 //! (method 1: occluders eroded by the octagon around the cell's bounding disc, after
-//! Wonka et al. 2000).
+//! Wonka et al. 2000); and `erosion-rays`, the X-sampling ray test of §7.1 (Theorem
+//! 2: occludees sampled by points, rays from the centre against occluders eroded by
+//! the cell, see [`rays`]).
 //!
 //! **Guarantee**: the PVS contains every object visible from the cell's free space —
 //! at any resolution (the parameter only trades tightness for time).
@@ -16,6 +18,7 @@
 //!   conservative min-filter — cached for every cell of the same *shape* (§5.1).
 //! * [`shrink`]: occludee pieces, the supporting segment of each (§3.3, §5.1), the
 //!   shrunk occludee (§4.4) and the eye raise that makes §3.3 hold in 3D.
+//! * [`rays`]: the X-sampling of occludees for `erosion-rays` (§7.1).
 //! * [`occlusion`]: the from-centre test (§5) on a polar occlusion map: eroded
 //!   occluders marched front to back along each needed direction with the inner rule
 //!   and farthest depth, stopping once the horizon is closed (§7 "Scaling"); occludees
@@ -40,6 +43,7 @@
 pub mod erode;
 pub mod field;
 pub mod occlusion;
+pub mod rays;
 pub mod shrink;
 
 use crate::{MethodError, MethodOptions, VisibilityMethod};
@@ -75,6 +79,9 @@ pub enum Variant {
     Cell,
     /// Method 1: erosion by the octagon around the bounding disc (`shrink-sphere`).
     Sphere,
+    /// §7.1: occludees X-sampled by points, rays against the erosion by the cell
+    /// (`erosion-rays`).
+    Rays,
 }
 
 /// Prepare `name` (one of the four erosion methods) for `scene`.
@@ -88,6 +95,7 @@ pub fn create(
         "erosion-segment" => Variant::Segment,
         "erosion-cell" => Variant::Cell,
         "shrink-sphere" => Variant::Sphere,
+        "erosion-rays" => Variant::Rays,
         n => return Err(MethodError::Unknown(n.to_string())),
     };
     Ok(Box::new(ErosionMethod::new(name, variant, scene, opts)?))
@@ -214,6 +222,19 @@ impl ErosionMethod {
         let mut tests = Vec::new();
         for top in &self.tops[id] {
             match self.variant {
+                Variant::Rays => {
+                    // Theorem 2: the samples are a valid shrunk occludee for X = the
+                    // cell, so the test runs on the map of `Element::Cell`.
+                    let samples = rays::x_sampling(&top.ring, ctx.half, ctx.s)?;
+                    let parts: Vec<(Vec<DVec2>, bool)> =
+                        samples.iter().map(|&p| (vec![p - ctx.s], false)).collect();
+                    tests.push(Test {
+                        element: Element::Cell,
+                        target: Target::new(&ctx.bins, &parts),
+                        eye: ctx.z1,
+                        t: top.t,
+                    });
+                }
                 Variant::Cell | Variant::Sphere => {
                     let element = if self.variant == Variant::Cell {
                         Element::Cell

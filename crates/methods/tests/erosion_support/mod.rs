@@ -5,11 +5,12 @@
 use sightline_geom::{DVec2, DVec3, Polygon, ViewCell};
 use sightline_scene::{Object, Prism, Scene};
 
-pub const METHODS: [&str; 4] = [
+pub const METHODS: [&str; 5] = [
     "erosion",
     "erosion-segment",
     "erosion-cell",
     "shrink-sphere",
+    "erosion-rays",
 ];
 
 pub fn street(x0: f64, y0: f64, x1: f64, y1: f64) -> Object {
