@@ -160,3 +160,20 @@ fn serve_refuses_a_pvs_of_another_scene_or_a_broken_one() {
         );
     }
 }
+
+#[test]
+fn a_closed_stdout_ends_quietly() {
+    // `sightline info --json | head -0`: the reader is gone before the first line.
+    let lyon = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/lyon1_bdtopo.geojson");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_sightline"))
+        .args(["info", lyon.to_str().unwrap(), "--json"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(out.status.code(), Some(0), "{err}");
+}
