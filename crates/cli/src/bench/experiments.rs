@@ -17,12 +17,14 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
-/// The conservative methods, in the order of SPEC §4.
+/// The conservative methods, in the order of SPEC §4 (`erosion-rays`, issue 4's §7.1
+/// variant, after the erosion family).
 const CONSERVATIVE: &[&str] = &[
     "erosion",
     "erosion-segment",
     "erosion-cell",
     "shrink-sphere",
+    "erosion-rays",
     "dual-ray",
     "dual-ray-exact",
     "ext-proj",
