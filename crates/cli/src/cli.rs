@@ -68,9 +68,13 @@ pub enum Command {
         /// Size: number of buildings (city 500, metropolis 150000) or trees (forest 500).
         #[arg(long)]
         size: Option<usize>,
-        /// forest: leaf quads per tree (default 200).
+        /// forest: leaf quads per tree (default 200, 1500 with --dense).
         #[arg(long)]
         leaves: Option<usize>,
+        /// forest: the dense forest of the occlusion sweep (ext. proj. paper §7.2): crowns
+        /// down to the ground 4 m apart, 1,500 leaves each; most trees are hidden from inside.
+        #[arg(long)]
+        dense: bool,
         /// Output: .geojson/.json (city, metropolis) or .obj (any kind; forest needs .obj).
         #[arg(short, long)]
         out: PathBuf,
@@ -112,6 +116,9 @@ pub enum Command {
         /// ext-proj: run the occlusion sweep.
         #[arg(long)]
         sweep: bool,
+        /// ext-proj --sweep: number of sweep planes per direction (default 15, §7.2).
+        #[arg(long)]
+        planes: Option<u32>,
         #[arg(long)]
         json: bool,
     },
@@ -141,6 +148,9 @@ pub enum Command {
         /// ext-proj: run the occlusion sweep.
         #[arg(long)]
         sweep: bool,
+        /// ext-proj --sweep: number of sweep planes per direction (default 15, §7.2).
+        #[arg(long)]
+        planes: Option<u32>,
         #[arg(short, long)]
         out: PathBuf,
         /// Continue an interrupted build from its journal.
@@ -179,6 +189,12 @@ pub enum Command {
         cells: Option<String>,
         #[arg(long)]
         resolution: Option<u32>,
+        /// ext-proj: run the occlusion sweep.
+        #[arg(long)]
+        sweep: bool,
+        /// ext-proj --sweep: number of sweep planes per direction (default 15, §7.2).
+        #[arg(long)]
+        planes: Option<u32>,
         #[arg(long)]
         json: bool,
     },

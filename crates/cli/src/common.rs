@@ -55,3 +55,54 @@ pub fn write_atomic(path: &std::path::Path, bytes: &[u8]) -> anyhow::Result<()> 
     std::fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display()))?;
     Ok(())
 }
+
+/// Method options from the shared flags (`--resolution`, `--sweep`, `--planes`); the
+/// sweep flags belong to `ext-proj` only and are refused for any other method rather
+/// than silently ignored.
+pub fn method_options(
+    method: &str,
+    resolution: Option<u32>,
+    sweep: bool,
+    planes: Option<u32>,
+) -> anyhow::Result<sightline_methods::MethodOptions> {
+    if sweep && method != "ext-proj" {
+        anyhow::bail!("--sweep only applies to --method ext-proj (got '{method}')");
+    }
+    if let Some(k) = planes {
+        if !sweep {
+            anyhow::bail!("--planes sets the number of sweep planes: it needs --sweep");
+        }
+        if !(1..=256).contains(&k) {
+            anyhow::bail!("--planes must be between 1 and 256, got {k}");
+        }
+    }
+    Ok(sightline_methods::MethodOptions {
+        resolution_px: resolution,
+        sweep,
+        planes,
+        ..Default::default()
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::method_options;
+
+    #[test]
+    fn sweep_options_reach_ext_proj_and_only_it() {
+        let o = method_options("ext-proj", Some(128), true, Some(5)).unwrap();
+        assert!(o.sweep);
+        assert_eq!(o.planes, Some(5));
+        assert_eq!(o.resolution_px, Some(128));
+        let p = sightline_methods::ext_proj::Params::from_options(&o);
+        assert!(p.sweep);
+        assert_eq!(p.sweep_planes, 5);
+        // Refused rather than silently ignored.
+        let e = method_options("erosion", None, true, None).unwrap_err();
+        assert!(e.to_string().contains("ext-proj"), "{e}");
+        let e = method_options("ext-proj", None, false, Some(5)).unwrap_err();
+        assert!(e.to_string().contains("--sweep"), "{e}");
+        assert!(method_options("ext-proj", None, true, Some(0)).is_err());
+        assert!(!method_options("erosion", None, false, None).unwrap().sweep);
+    }
+}

@@ -226,3 +226,70 @@ fn demo_runs_end_to_end() {
     );
     assert_eq!(methods.len(), sightline_methods::METHOD_NAMES.len());
 }
+
+#[test]
+fn check_runs_the_sweep_from_the_cli() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("dense.obj");
+    let o = sightline(&[
+        "generate",
+        "forest",
+        "--dense",
+        "--size",
+        "9",
+        "--leaves",
+        "100",
+        "-o",
+        path(&obj),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let cells = dir.path().join("cells.json");
+    std::fs::write(&cells, "[[1.75,1.75,1.5,2.25,2.25,2.0]]").unwrap();
+    let o = sightline(&[
+        "check",
+        path(&obj),
+        "--method",
+        "ext-proj",
+        "--sweep",
+        "--planes",
+        "3",
+        "--resolution",
+        "64",
+        "--cells",
+        path(&cells),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["params"]["sweep"], "true");
+    assert_eq!(v["params"]["planes"], "3");
+    assert_eq!(v["params"]["resolution"], "64");
+    assert_eq!(v["missed"], 0);
+    // The sweep flags are refused where they mean nothing.
+    for args in [
+        vec![
+            "check",
+            path(&obj),
+            "--method",
+            "erosion",
+            "--sweep",
+            "--cells",
+            path(&cells),
+        ],
+        vec![
+            "check",
+            path(&obj),
+            "--method",
+            "ext-proj",
+            "--planes",
+            "3",
+            "--cells",
+            path(&cells),
+        ],
+        vec!["generate", "city", "--dense", "-o", path(&obj)],
+    ] {
+        let o = sightline(&args);
+        assert!(!o.status.success(), "{args:?} should fail");
+        assert!(stderr(&o).starts_with("error:"), "{args:?}: {}", stderr(&o));
+    }
+}

@@ -119,3 +119,60 @@ fn leaves_fill_the_occlusion_maps() {
     let best = sw.planes.iter().map(|p| p.umbra.count()).max().unwrap_or(0);
     assert!(best > 5000, "{best}");
 }
+
+/// The generated dense forest (`ForestParams::dense`, few trees): from a small cell
+/// inside it the sweep's PVS is a subset of the plain PVS (by construction: the sweep
+/// only adds a hiding test on the same planes, and the default subdivision does not
+/// depend on the PVS), misses nothing the ground truth sees, and culls trees that plain
+/// extended projections cannot (leaves are not occluders there: only the thin trunks).
+#[test]
+fn sweep_culls_the_dense_generated_forest_without_missing() {
+    use sightline_methods::check::{ground_truth, TruthOptions};
+    use sightline_scene::generate::{forest_with, ForestParams};
+    let scene = Arc::new(forest_with(1, &ForestParams::dense(100)));
+    // A 0.5 m cell between four trees near a corner of the 10 × 10 grid (4 m spacing),
+    // looking across the forest.
+    let c: ViewCell = "5.75,5.75,1.5,6.25,6.25,2".parse().expect("cell");
+    let params = Params {
+        resolution_px: 512,
+        ..Params::default()
+    };
+    let plain = ExtProj::new(scene.clone(), params.clone())
+        .pvs(&c)
+        .expect("pvs");
+    let swept = ExtProj::new(
+        scene.clone(),
+        Params {
+            sweep: true,
+            sweep_planes: 15,
+            ..params
+        },
+    )
+    .pvs(&c)
+    .expect("pvs");
+    assert!(swept.iter().all(|i| plain.binary_search(i).is_ok()));
+    let truth = ground_truth(
+        &scene,
+        &c,
+        &TruthOptions {
+            samples: 16,
+            resolution_px: 256,
+            ..TruthOptions::default()
+        },
+    );
+    let missed: Vec<u32> = truth
+        .visible
+        .iter()
+        .copied()
+        .filter(|i| swept.binary_search(i).is_err())
+        .collect();
+    assert!(missed.is_empty(), "missed {missed:?}");
+    assert!(
+        swept.len() < plain.len(),
+        "sweep {} vs plain {} of {} (truth {})",
+        swept.len(),
+        plain.len(),
+        scene.objects.len(),
+        truth.visible.len()
+    );
+}

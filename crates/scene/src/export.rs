@@ -144,7 +144,9 @@ pub fn write_geojson(scene: &Scene, w: &mut impl Write) -> Result<(), ExportErro
 
 /// Write every object as an OBJ object (`o name`) of triangles; meshes keep their own
 /// vertices and triangles, blocks and flat objects are triangulated
-/// ([`Object::triangles`](crate::Object::triangles)).
+/// ([`Object::triangles`](crate::Object::triangles)). Positions are written **y-up**,
+/// (x, y, z) ↦ (x, z, −y), the convention the OBJ importer reads, so that a written
+/// scene loads back upright.
 pub fn write_obj(scene: &Scene, w: &mut impl Write) -> Result<(), ExportError> {
     writeln!(w, "# sightline scene: {} objects", scene.objects.len())?;
     let mut next = 1usize; // OBJ indices are 1-based and global
@@ -171,8 +173,8 @@ pub fn write_obj(scene: &Scene, w: &mut impl Write) -> Result<(), ExportError> {
                 w,
                 "v {} {} {}",
                 num(v.x, index)?,
-                num(v.y, index)?,
-                num(v.z, index)?
+                num(v.z, index)?,
+                num(-v.y, index)?
             )?;
         }
         for t in &triangles {

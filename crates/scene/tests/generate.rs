@@ -236,6 +236,33 @@ fn obj_writer_writes_one_object_per_tree() {
     assert_eq!(max_index, 3 * 48);
 }
 
+/// A forest written as OBJ loads back upright (the importer reads OBJ as y-up).
+#[test]
+fn obj_round_trips_through_the_importer() {
+    use sightline_scene::import::obj;
+    let s = generate::forest_with(
+        3,
+        &ForestParams {
+            trees: 4,
+            leaves_per_tree: 20,
+            ..ForestParams::default()
+        },
+    );
+    let mut out = Vec::new();
+    export::write_obj(&s, &mut out).unwrap();
+    let back = obj::parse(&out).unwrap();
+    assert_eq!(back.objects.len(), s.objects.len());
+    for (a, b) in s.objects.iter().zip(&back.objects) {
+        assert!(
+            (a.bounds.min - b.bounds.min).abs().max_element() < 1e-3
+                && (a.bounds.max - b.bounds.max).abs().max_element() < 1e-3,
+            "{:?} came back as {:?}",
+            a.bounds,
+            b.bounds
+        );
+    }
+}
+
 #[test]
 fn geojson_round_trips_through_the_importer() {
     use sightline_scene::import::{geojson, ImportOptions};

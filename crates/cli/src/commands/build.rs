@@ -1,7 +1,7 @@
 //! `sightline build`, `sightline merge` and `sightline query`: the PVS store (SPEC §5, §6).
 
 use crate::cli::{Command, SceneArg};
-use crate::common::{load_scene, print_json, progress};
+use crate::common::{load_scene, method_options, print_json, progress};
 use anyhow::Context;
 use serde::Serialize;
 use sightline_geom::{DVec3, ViewCell};
@@ -20,6 +20,7 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
             method,
             resolution,
             sweep,
+            planes,
             out,
             resume,
             shard,
@@ -27,11 +28,7 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
             &scene,
             &cells,
             &method,
-            MethodOptions {
-                resolution_px: resolution,
-                sweep,
-                ..Default::default()
-            },
+            method_options(&method, resolution, sweep, planes)?,
             &out,
             resume,
             shard.as_deref(),

@@ -1,11 +1,11 @@
 //! `sightline check`: a method's PVS against the ground truth on many cells (SPEC §5).
 
 use crate::cli::Command;
-use crate::common::{load_scene, print_json, progress};
+use crate::common::{load_scene, method_options, print_json, progress};
 use anyhow::{bail, Context};
 use sightline_geom::ViewCell;
 use sightline_methods::check::{check_cells, street_cells, TruthOptions};
-use sightline_methods::{create, MethodError, MethodOptions, VisibilityMethod, METHOD_NAMES};
+use sightline_methods::{create, MethodError, VisibilityMethod, METHOD_NAMES};
 use sightline_pvs::PvsFile;
 use std::sync::Arc;
 
@@ -41,6 +41,8 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         method,
         cells,
         resolution,
+        sweep,
+        planes,
         json,
     } = cmd
     else {
@@ -48,6 +50,9 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
     };
     let sc = Arc::new(load_scene(&scene)?);
     let (m, cells): (Box<dyn VisibilityMethod>, Vec<ViewCell>) = if let Some(file) = pvs {
+        if sweep || planes.is_some() {
+            bail!("--sweep and --planes are options of --method ext-proj, not of a .pvs file");
+        }
         // `check SCENE city.pvs --cells K`: K cells sampled evenly from the file.
         let f = PvsFile::open(&file).with_context(|| format!("cannot open {}", file.display()))?;
         f.check_scene(&sc).with_context(|| {
@@ -75,14 +80,8 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         };
         let cells_arg = cells.unwrap_or_else(|| "20".to_string());
         let cells = read_cells(&cells_arg, &sc)?;
-        let m = create(
-            &method,
-            sc.clone(),
-            &MethodOptions {
-                resolution_px: resolution,
-                ..MethodOptions::default()
-            },
-        )?;
+        let opts = method_options(&method, resolution, sweep, planes)?;
+        let m = create(&method, sc.clone(), &opts)?;
         (m, cells)
     };
     let pb = progress(cells.len() as u64, quiet, "checking cells");
@@ -102,6 +101,7 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
     if json {
         print_json(&serde_json::json!({
             "method": report.method,
+            "params": m.params().into_iter().collect::<std::collections::BTreeMap<_, _>>(),
             "conservative": m.is_conservative(),
             "cells": report.cells,
             "missed": report.missed,

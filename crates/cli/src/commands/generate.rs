@@ -20,6 +20,7 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         seed,
         size,
         leaves,
+        dense,
         out,
     } = cmd
     else {
@@ -35,6 +36,9 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
     if leaves.is_some() && kind != GenerateKind::Forest {
         bail!("--leaves only applies to `generate forest`");
     }
+    if dense && kind != GenerateKind::Forest {
+        bail!("--dense only applies to `generate forest`");
+    }
     let t0 = Instant::now();
     let (name, scene) = match kind {
         GenerateKind::City => {
@@ -47,7 +51,12 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         }
         GenerateKind::Forest => {
             let trees = check_size(size.unwrap_or(500), MAX_TREES, "trees")?;
-            let leaves_per_tree = leaves.unwrap_or(200);
+            let base = if dense {
+                ForestParams::dense(trees)
+            } else {
+                ForestParams::default()
+            };
+            let leaves_per_tree = leaves.unwrap_or(base.leaves_per_tree);
             if trees.saturating_mul(leaves_per_tree) > MAX_LEAVES_TOTAL {
                 bail!(
                     "{trees} trees × {leaves_per_tree} leaves is more than {MAX_LEAVES_TOTAL} leaves"
@@ -56,7 +65,7 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
             let p = ForestParams {
                 trees,
                 leaves_per_tree,
-                ..ForestParams::default()
+                ..base
             };
             ("forest", generate::forest_with(seed, &p))
         }

@@ -1,7 +1,7 @@
 //! `sightline pvs`: the PVS of one viewcell with one method.
 
 use crate::cli::{Command, SceneArg};
-use crate::common::{load_scene, print_json};
+use crate::common::{load_scene, method_options, print_json};
 use serde::Serialize;
 use sightline_geom::ViewCell;
 use sightline_methods::{create, MethodOptions};
@@ -24,29 +24,25 @@ pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
         method,
         resolution,
         sweep,
+        planes,
         json,
     } = cmd
     else {
         unreachable!("dispatched by commands::run")
     };
-    pvs(&scene, &cell, &method, resolution, sweep, json)
+    let opts = method_options(&method, resolution, sweep, planes)?;
+    pvs(&scene, &cell, &method, &opts, json)
 }
 
 fn pvs(
     scene_arg: &SceneArg,
     cell: &ViewCell,
     method: &str,
-    resolution: Option<u32>,
-    sweep: bool,
+    opts: &MethodOptions,
     json: bool,
 ) -> anyhow::Result<()> {
     let scene = Arc::new(load_scene(scene_arg)?);
-    let opts = MethodOptions {
-        resolution_px: resolution,
-        sweep,
-        ..Default::default()
-    };
-    let m = create(method, scene.clone(), &opts)?;
+    let m = create(method, scene.clone(), opts)?;
     let t = Instant::now();
     let visible = m.pvs(cell)?;
     let seconds = t.elapsed().as_secs_f64();

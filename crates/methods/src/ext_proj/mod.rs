@@ -26,9 +26,9 @@
 //! 6. the adaptive subdivision of §6.1 ([`adaptive`]); by default (budget 0, minimum
 //!    25 m) it splits only cells wider than 50 m, down to 25 m.
 //!
-//! Parameters: `resolution_px` (default 256, rounded up to a power of two as the
-//! pyramid needs, §7.1), `sweep`, `planes` (number of sweep planes per direction,
-//! default 15 as in §7.2).
+//! Parameters: `resolution_px` (default 256, 512 with the sweep; rounded up to a power
+//! of two as the pyramid needs, §7.1), `sweep`, `planes` (number of sweep planes per
+//! direction, default 15 as in §7.2).
 
 pub mod adaptive;
 pub mod depth_map;
@@ -64,6 +64,11 @@ pub struct Params {
     pub sweep_planes: usize,
     /// Kernel size K of §5 (pixels), which sets the spacing of the sweep planes.
     pub kernel_px: usize,
+    /// The first sweep plane lies at least this far beyond the cell's far face (m).
+    /// The §5.2 spacing grows as the square of the distance: from a plane hugging the
+    /// cell the requested planes would all fall within centimetres of it, where
+    /// nothing can be hidden yet (occluders there Project to almost nothing).
+    pub sweep_start_m: f64,
     /// Solid-angle threshold (sr) of occluder relevance (§6.1).
     pub solid_angle: f64,
     /// At most this many occluder pieces per direction (largest solid angle first).
@@ -91,6 +96,7 @@ impl Default for Params {
             sweep: false,
             sweep_planes: 15,
             kernel_px: 5,
+            sweep_start_m: 2.0,
             solid_angle: 0.002,
             max_occluders: 3000,
             plane_candidates: 12,
@@ -107,17 +113,28 @@ impl Default for Params {
 
 impl Params {
     pub fn from_options(opts: &MethodOptions) -> Self {
-        let mut p = Params::default();
+        let mut p = Params {
+            sweep: opts.sweep,
+            ..Params::default()
+        };
+        if p.sweep {
+            p.resolution_px = SWEEP_RESOLUTION_PX;
+        }
         if let Some(r) = opts.resolution_px {
             p.resolution_px = (r.clamp(8, 4096) as usize).next_power_of_two();
         }
-        p.sweep = opts.sweep;
         if let Some(k) = opts.planes {
             p.sweep_planes = (k as usize).clamp(1, 256);
         }
         p
     }
 }
+
+/// Default resolution with the sweep (`--resolution` overrides it): the sweep fuses
+/// leaves only where their Projections stay several pixels wide after the K-pixel
+/// kernel of each step; on the dense forest (0.5 m cells, 15 planes) it culls ~1 % of
+/// the trees at 256 px and ~43 % at 512.
+pub const SWEEP_RESOLUTION_PX: usize = 512;
 
 /// Resolution (pixels per side) of the depth maps on which candidate planes are scored.
 pub const SCORING_PX: usize = 128;
@@ -507,6 +524,7 @@ impl VisibilityMethod for ExtProj {
         if p.sweep {
             v.push(("planes".to_string(), p.sweep_planes.to_string()));
             v.push(("kernel".to_string(), p.kernel_px.to_string()));
+            v.push(("sweep_start".to_string(), p.sweep_start_m.to_string()));
         }
         if let Some(b) = p.adaptive_budget {
             v.push(("adaptive_budget".to_string(), b.to_string()));

@@ -4,22 +4,29 @@
 //! (black = in the umbra of the occluders in front of the plane) is
 //! * the previous plane's map **re-projected**: the black pixels of a plane behind the
 //!   occluders lie in their umbra and form one planar equivalent occluder (App. B,
-//!   Property 3); its umbra on the next plane, seen from the *equivalent planar cell*
-//!   `E` (the rectangle on the cell's far-face plane crossed by every ray from the
-//!   cell to the next plane's rectangle, Fig. 11c), is the convolution of the map by
-//!   the inverse image of `E`, keeping only fully black pixels (§5.1). We evaluate it
-//!   exactly per pixel: pixel `Q` of the new plane is black iff the rectangle
-//!   `a·Q + (1−a)·E` (`a = d₁/d₂`, Thales) touches only black pixels of the old map —
-//!   the over-estimated kernel of the paper, computed with a summed-area table;
+//!   Property 3); its umbra on the next plane is the convolution of the map by the
+//!   inverse image of the cell, keeping only fully black pixels (§5.1). The paper
+//!   convolves with the inverse image of the *equivalent planar cell* `E` (the
+//!   rectangle on the cell's far-face plane crossed by every ray from the cell to the
+//!   next plane's rectangle, Fig. 11c; [`equivalent_cell`]) so that one kernel serves
+//!   the whole plane. We evaluate per pixel (a summed-area table answers "all black?"
+//!   for a rectangle in O(1)) with the cell's own near and far faces, which `E`
+//!   contains: pixel `Q` is black iff the bounding rectangle of the cell's view from
+//!   `Q` on the old plane touches only black pixels ([`reproject`]). For a deep cell
+//!   near the planes `E` is several times the cell, and so was the erosion per plane;
+//! * plus the ground: plane points below z = 0 are in its umbra (SPEC §3,
+//!   [`ground_black`]);
 //! * plus the Projections of the occluders lying between the two planes, including
 //!   every mesh triangle (the leaves: each alone hides almost nothing, but their
 //!   Projections fuse in the union-aware coverage and then in the re-projected map);
 //! * plus the slices of the prisms cut by the plane (§3.3).
 //!
-//! Planes are spaced by `ΔD = D(K−1)P/(CN)` (§5.2: `D` distance from the equivalent
-//! cell, `C` its size, `P` the plane's size, `N` the resolution, `K = 5` the kernel
-//! in pixels) from just behind the nearest occluder; the sweep stops after the
-//! requested number of planes (denser near the cell, where occlusion varies fastest).
+//! Planes are spaced by `ΔD = D(K−1)P/(CN)` (§5.2: `D` distance from the cell's far
+//! face, `C` the cell's cross-section — the size of the kernel's source, as above —
+//! `P` the plane's size, `N` the resolution, `K = 5` the kernel in pixels) from
+//! `sweep_start_m` beyond the cell (or just behind the nearest occluder); the sweep
+//! stops after the requested number of planes (denser near the cell, where occlusion
+//! varies fastest).
 //! Occludees behind a plane are hidden when their Projection (supporting lines,
 //! §3.1) covers only black pixels: black pixels have depth ≤ 0 by construction.
 
@@ -99,10 +106,11 @@ pub fn plane_positions(ext: &ExtProj, lc: &LocalBox, x0: f64, x1: f64, k: usize)
     }
     let n = ext.params.resolution_px as f64;
     let kk = ext.params.kernel_px.max(2) as f64;
+    // The kernel of [`reproject`] is the inverse image of the cell's own faces: its
+    // size on the plane is about C·ΔD/D with C the cell's cross-section.
+    let c = (lc.max.y - lc.min.y).max(lc.max.z - lc.min.z).max(1e-3);
     let step = |x: f64| -> f64 {
         let plane = Plane::new(Direction::PosX, lc, x, 1, ext.params.extension);
-        let e = equivalent_cell(lc, &plane);
-        let c = e.size().max_element().max(1e-3);
         let p = plane.rect.size().max_element();
         let d = x - lc.max.x;
         d * (kk - 1.0) * p / (c * n)
@@ -134,22 +142,44 @@ pub fn equivalent_cell(lc: &LocalBox, plane: &Plane) -> sightline_geom::Aabb2 {
     )
 }
 
-/// Re-project the occlusion map of `from` onto `to` (§5.1).
+/// Re-project the occlusion map of `from` onto `to` (§5.1): pixel `Q` of `to` is black
+/// iff every point of `from` through which a sight line from the cell reaches `Q` is
+/// black (then each such line is blocked before `from`, black points being in the
+/// umbra). Those points are the view of the cell from `Q` on `from`, inside the
+/// bounding rectangle of the views of the cell's corners. For a corner `e` the view
+/// of `e` through `Q` is `t·Q + (1−t)·e` with `t = (x₁ − e_w)/(x₂ − e_w)`, affine in
+/// `Q`, so over the pixel and the corners it spans the rectangles `t·pixel + (1−t)·face`
+/// for the near and the far face — the inverse image of the cell, conservatively
+/// rasterized (over-estimated to whole pixels), as the convolution kernel of §5.1.
+/// It is the paper's kernel with the cell itself in place of its planar equivalent
+/// `E` ([`equivalent_cell`]), which contains it: the paper needs one kernel for the
+/// whole plane (a convolution on graphics hardware); evaluated per pixel (a summed-
+/// area table answers "all black?" for a rectangle in O(1)) the cell's own faces give
+/// a kernel several times smaller for a deep cell near the plane, and still every
+/// sight line from the cell to the pixel passes through it.
 pub fn reproject(lc: &LocalBox, from: &Plane, map: &OcclusionMap, to: &Plane) -> Vec<bool> {
     let n = to.n;
     let mut out = vec![false; n * n];
     if map.count() == 0 {
         return out;
     }
-    let e = equivalent_cell(lc, to);
-    let a = (from.x - lc.max.x) / (to.x - lc.max.x);
+    let (face0, face1) = (
+        DVec2::new(lc.min.y, lc.min.z),
+        DVec2::new(lc.max.y, lc.max.z),
+    );
+    let t_of = |ew: f64| (from.x - ew) / (to.x - ew);
+    let ts = [t_of(lc.min.x), t_of(lc.max.x)];
     let ps = to.pixel_size();
     for j in 0..n {
         for i in 0..n {
             let q0 = to.rect.min + DVec2::new(i as f64, j as f64) * ps;
             let q1 = q0 + ps;
-            let lo = q0 * a + e.min * (1.0 - a);
-            let hi = q1 * a + e.max * (1.0 - a);
+            let mut lo = DVec2::splat(f64::INFINITY);
+            let mut hi = DVec2::splat(f64::NEG_INFINITY);
+            for &t in &ts {
+                lo = lo.min(q0 * t + face0 * (1.0 - t));
+                hi = hi.max(q1 * t + face1 * (1.0 - t));
+            }
             let (plo, phi) = (from.to_px(lo), from.to_px(hi));
             if let Some(r) = pixel_range(plo, phi, map.n) {
                 out[j * n + i] = map.all_black(r);
@@ -206,7 +236,7 @@ fn sweep_direction(
     }
     let mut fars: Vec<f64> = occ.iter().map(|o| o.far).collect();
     fars.sort_by(f64::total_cmp);
-    let x0 = (fars[0] + 1e-3).max(lc.max.x + 0.5);
+    let x0 = (fars[0] + 1e-3).max(lc.max.x + ext.params.sweep_start_m.max(FACE_CLEARANCE_M));
     let x1 = fars[fars.len() - 1] + 1e-3;
     let xs = plane_positions(ext, &lc, x0, x1.max(x0 + 1.0), ext.params.sweep_planes);
     let n = ext.params.resolution_px;
@@ -246,6 +276,7 @@ fn sweep_direction(
                 }
             }
         }
+        ground_black(&plane, &mut black);
         out.push(SweepPlane {
             plane,
             cell: lc,
@@ -254,6 +285,33 @@ fn sweep_direction(
     }
     out.retain(|p| p.umbra.count() > 0);
     out
+}
+
+/// The ground is opaque (SPEC §3: no sight line meets the ground below z = 0) and the
+/// cell lies above it, so every sight line from the cell to a plane point below the
+/// ground meets the ground first: such pixels are in the umbra. For the horizontal
+/// directions these are the rows whose whole extent lies below z = 0 (`v` is z); for
+/// `-z`, a plane at or below the ground is entirely black.
+pub fn ground_black(plane: &Plane, black: &mut [bool]) {
+    let n = plane.n;
+    match plane.dir {
+        Direction::PosZ => {}
+        Direction::NegZ => {
+            // Local w = −z: the plane is at z = −x.
+            if -plane.x <= 0.0 {
+                black.iter_mut().for_each(|b| *b = true);
+            }
+        }
+        _ => {
+            for j in 0..n {
+                if plane.from_px(DVec2::new(0.0, (j + 1) as f64)).y <= 0.0 {
+                    black[j * n..(j + 1) * n].iter_mut().for_each(|b| *b = true);
+                } else {
+                    break;
+                }
+            }
+        }
+    }
 }
 
 /// A cheap proof that an occluder's Projection on `w = x` covers no full pixel: its
@@ -279,6 +337,74 @@ mod tests {
         let e = equivalent_cell(&lc, &plane);
         assert!(e.min.x <= 0.0 && e.max.x >= 10.0 && e.min.y <= 0.0 && e.max.y >= 2.0);
         assert!(e.size().x > 10.0);
+    }
+
+    /// Rows wholly below the ground are black on horizontal planes, the row crossing
+    /// z = 0 is not; a -z plane below the ground is all black, a +z plane untouched.
+    #[test]
+    fn the_ground_is_in_the_umbra() {
+        let cell = (DVec3::new(0.0, 0.0, 1.5), DVec3::new(2.0, 2.0, 2.0));
+        let n = 64;
+        let lc = Direction::PosX.box_to_local(cell.0, cell.1);
+        let plane = Plane::new(Direction::PosX, &lc, 10.0, n, 1.5);
+        let mut black = vec![false; n * n];
+        ground_black(&plane, &mut black);
+        for j in 0..n {
+            let top = plane.from_px(DVec2::new(0.0, (j + 1) as f64)).y;
+            assert_eq!(black[j * n], top <= 0.0, "row {j} top {top}");
+            assert!(black[j * n..(j + 1) * n].iter().all(|b| *b == black[j * n]));
+        }
+        assert!(black.iter().any(|b| *b) && !black.iter().all(|b| *b));
+        for (dir, all) in [(Direction::NegZ, true), (Direction::PosZ, false)] {
+            let lc = dir.box_to_local(cell.0, cell.1);
+            let plane = Plane::new(dir, &lc, lc.max.x + 3.0, n, 1.5);
+            let mut black = vec![false; n * n];
+            ground_black(&plane, &mut black);
+            assert!(black.iter().all(|b| *b == all), "{dir:?}");
+        }
+    }
+
+    /// The kernel is the inverse image of the cell itself: for a deep cell it erodes a
+    /// black square less than the kernel of the (larger) equivalent planar cell would.
+    #[test]
+    fn reprojection_kernel_is_the_cells_own() {
+        let lc = Direction::PosX.box_to_local(DVec3::ZERO, DVec3::new(6.0, 1.0, 1.0));
+        let from = Plane::new(Direction::PosX, &lc, 10.0, 128, 1.5);
+        let to = Plane::new(Direction::PosX, &lc, 10.5, 128, 1.5);
+        let n = 128;
+        let mut black = vec![false; n * n];
+        for j in 32..96 {
+            for i in 32..96 {
+                black[j * n + i] = true;
+            }
+        }
+        let m = OcclusionMap::new(n, black);
+        let ours = reproject(&lc, &from, &m, &to)
+            .iter()
+            .filter(|b| **b)
+            .count();
+        // The same rule with the equivalent cell's rectangle as the source.
+        let e = equivalent_cell(&lc, &to);
+        let a = (from.x - lc.max.x) / (to.x - lc.max.x);
+        let ps = to.pixel_size();
+        let mut theirs = 0;
+        for j in 0..n {
+            for i in 0..n {
+                let q0 = to.rect.min + DVec2::new(i as f64, j as f64) * ps;
+                let (lo, hi) = (
+                    q0 * a + e.min * (1.0 - a),
+                    (q0 + ps) * a + e.max * (1.0 - a),
+                );
+                if let Some(r) = pixel_range(from.to_px(lo), from.to_px(hi), n) {
+                    theirs += m.all_black(r) as usize;
+                }
+            }
+        }
+        assert!(
+            ours > theirs,
+            "cell kernel {ours} vs equivalent-cell kernel {theirs}"
+        );
+        assert!(ours < 64 * 64);
     }
 
     /// A fully black map stays black inside when re-projected, and its border erodes.
