@@ -15,7 +15,7 @@
 //! `ASPECT=a:b`, `TRUNK=a:b`, `LIFT` override the dense preset (for tuning).
 
 use rayon::prelude::*;
-use sightline_geom::{DVec3, ViewCell};
+use sightline_geom::ViewCell;
 use sightline_methods::check::{aggregate, compare, TruthOptions, TruthScene};
 use sightline_methods::ext_proj::{ExtProj, Params};
 use sightline_methods::VisibilityMethod;
@@ -74,26 +74,11 @@ fn main() {
     let scene = Arc::new(forest_with(1, &p));
     let tris: usize = scene.objects.iter().map(|o| o.triangle_count()).sum();
     // Cells centred between four trees, spread over the middle half of the forest.
-    let g = (trees as f64).sqrt().ceil() as usize;
-    let lo = g / 4;
-    let span = (g / 2).max(1);
     let cells: Vec<ViewCell> =
         if let Some(c) = std::env::var("CELL").ok().and_then(|s| s.parse().ok()) {
             vec![c]
         } else {
-            (0..want)
-                .map(|k| {
-                    let i = lo + (k * 7 + 1) % span;
-                    let j = lo + (k * 5 + 2) % span;
-                    let (x, y) = (
-                        (i as f64 + 0.5) * p.spacing_m,
-                        (j as f64 + 0.5) * p.spacing_m,
-                    );
-                    let h = 0.5 * cell_m;
-                    ViewCell::new(DVec3::new(x - h, y - h, 1.5), DVec3::new(x + h, y + h, 2.0))
-                        .expect("cell")
-                })
-                .collect()
+            p.cells_between_trees(cell_m, want)
         };
     println!(
         "dense forest: {} trees, {} triangles, {} cells of {cell_m} m; truth {samples} viewpoints at {res} px; {} threads",

@@ -155,33 +155,6 @@ fn cell_key(c: &ViewCell) -> String {
 /// the trees from 0.5 m cells, ~70 % from 0.25 m, nothing from 1–2 m.
 pub const FOREST_CELL_M: f64 = 0.5;
 
-/// `n` cells of side `size_m` at eye height, each centred between four trees of the
-/// forest grid, spread over the middle half of the forest.
-pub fn forest_cells(
-    p: &sightline_scene::generate::ForestParams,
-    size_m: f64,
-    n: usize,
-) -> Vec<ViewCell> {
-    let g = ((p.trees as f64).sqrt().ceil() as usize).max(2);
-    let (lo, span) = (g / 4, (g / 2).max(1));
-    (0..n)
-        .filter_map(|k| {
-            let i = lo + (k * 7 + 1) % span;
-            let j = lo + (k * 5 + 2) % span;
-            let (x, y) = (
-                (i as f64 + 0.5) * p.spacing_m,
-                (j as f64 + 0.5) * p.spacing_m,
-            );
-            let h = 0.5 * size_m;
-            ViewCell::new(
-                sightline_geom::DVec3::new(x - h, y - h, 1.5),
-                sightline_geom::DVec3::new(x + h, y + h, 2.0),
-            )
-            .ok()
-        })
-        .collect()
-}
-
 pub fn pick_cells(scene: &Scene, size_m: f64, n: usize) -> Vec<ViewCell> {
     let all = sightline_scene::cells::grid_cells(scene, size_m, 1.5, 2.0).unwrap_or_default();
     if all.len() <= n {
@@ -651,7 +624,7 @@ fn ext_proj(b: &mut Bench, city: &NamedScene, rep: &mut Report, out: &Path) -> a
         .iter()
         .map(|o| o.triangle_count())
         .sum();
-    let cells = forest_cells(&fp, FOREST_CELL_M, b.suite.cells_per_setting);
+    let cells = fp.cells_between_trees(FOREST_CELL_M, b.suite.cells_per_setting);
     let truths = b.truths(&forest, &cells);
     let mut table = Table::new(&[
         "variant",

@@ -14,7 +14,7 @@
 use super::{snap_mm, Rng};
 use crate::{Mesh, Object, Prism, Scene};
 use rayon::prelude::*;
-use sightline_geom::{Aabb2, DVec2, DVec3, Polygon};
+use sightline_geom::{Aabb2, DVec2, DVec3, Polygon, ViewCell};
 
 /// Parameters of [`forest_with`].
 #[derive(Clone, Debug, PartialEq)]
@@ -52,6 +52,26 @@ impl Default for ForestParams {
 }
 
 impl ForestParams {
+    /// `n` cells of side `size_m` at eye height, each centred between four trees of the
+    /// forest grid, spread over the middle half of the forest.
+    pub fn cells_between_trees(&self, size_m: f64, n: usize) -> Vec<ViewCell> {
+        let p = self;
+        let g = ((p.trees as f64).sqrt().ceil() as usize).max(2);
+        let (lo, span) = (g / 4, (g / 2).max(1));
+        (0..n)
+            .filter_map(|k| {
+                let i = lo + (k * 7 + 1) % span;
+                let j = lo + (k * 5 + 2) % span;
+                let (x, y) = (
+                    (i as f64 + 0.5) * p.spacing_m,
+                    (j as f64 + 0.5) * p.spacing_m,
+                );
+                let h = 0.5 * size_m;
+                ViewCell::new(DVec3::new(x - h, y - h, 1.5), DVec3::new(x + h, y + h, 2.0)).ok()
+            })
+            .collect()
+    }
+
     /// A dense forest for the occlusion sweep of the extended-projection paper (§7.2):
     /// crowns that reach the ground (their centre low, cut by it), 2.8–3.4 m wide, up
     /// to ~10 m tall, 4 m apart so that neighbours overlap, each with 1,500 leaves of
