@@ -86,33 +86,13 @@ pub fn x_sampling(ring: &[DVec2], half: DVec2, eye: DVec2) -> Option<Vec<DVec2>>
     let inf = f64::INFINITY;
     let mut out = Vec::new();
     for j in 0..ny {
-        // Row bounds: the outer rows are open-ended so the ring's extreme points are
-        // in a row whatever the rounding of `bb.min + k·step`.
-        let y0 = if j == 0 {
-            -inf
-        } else {
-            bb.min.y + step.y * j as f64
-        };
-        let y1 = if j + 1 == ny {
-            inf
-        } else {
-            bb.min.y + step.y * (j + 1) as f64
-        };
+        let (y0, y1) = band(j, ny, bb.min.y, step.y);
         let row = clip_ring(ring, DVec2::new(-inf, y0), DVec2::new(inf, y1));
         if row.len() < 3 || ring_signed_area(&row).abs() <= 1e-12 {
             continue;
         }
         for i in 0..nx {
-            let x0 = if i == 0 {
-                -inf
-            } else {
-                bb.min.x + step.x * i as f64
-            };
-            let x1 = if i + 1 == nx {
-                inf
-            } else {
-                bb.min.x + step.x * (i + 1) as f64
-            };
+            let (x0, x1) = band(i, nx, bb.min.x, step.x);
             let piece = clip_ring(&row, DVec2::new(x0, -inf), DVec2::new(x1, inf));
             if piece.len() < 3 || ring_signed_area(&piece).abs() <= 1e-12 {
                 continue;
@@ -143,6 +123,22 @@ fn farthest_cover(b: Aabb2, half: DVec2, eye: DVec2) -> Option<DVec2> {
         }
     };
     Some(DVec2::new(pick(lo.x, hi.x, eye.x), pick(lo.y, hi.y, eye.y)))
+}
+
+/// Bounds of band `k` of `n` bands of `step` from `min`; the outer bands are open-ended
+/// so a ring's extreme points fall in a band whatever the rounding of `min + k·step`.
+fn band(k: usize, n: usize, min: f64, step: f64) -> (f64, f64) {
+    let lo = if k == 0 {
+        f64::NEG_INFINITY
+    } else {
+        min + step * k as f64
+    };
+    let hi = if k + 1 == n {
+        f64::INFINITY
+    } else {
+        min + step * (k + 1) as f64
+    };
+    (lo, hi)
 }
 
 #[cfg(test)]
