@@ -70,23 +70,6 @@ fn thin_wall_vanishes_in_the_erosion_by_the_cell() {
 }
 
 #[test]
-fn slit_and_tower_behind_a_gap_are_seen() {
-    // A 1 m slit between two deep blocks: the street and the small block behind it
-    // are visible through it (the oracle sees them), and so must the rays be.
-    let scene = Arc::new(Scene::from_objects(vec![
-        Object::rect_block(20.0, -40.0, 30.0, -0.5, 20.0),
-        Object::rect_block(20.0, 0.5, 30.0, 40.0, 20.0),
-        street(30.0, -2.0, 200.0, 2.0),
-        Object::rect_block(100.0, -1.0, 104.0, 1.0, 6.0),
-    ]));
-    let c = cell(0.0, -5.0, 10.0, 5.0);
-    let vs = sampled_visible(&scene, &c, 5);
-    assert!(vs.contains(&2) && vs.contains(&3), "oracle: {vs:?}");
-    let p = rays(&scene).pvs(&c).expect("pvs");
-    assert!(missed(&p, &vs).is_empty(), "misses {:?}", missed(&p, &vs));
-}
-
-#[test]
 fn cells_against_and_inside_facades() {
     // Cells touching, overlapping and straddling the block: the samples of the block
     // itself fall near the eye, and what is behind a facade the cell overlaps is seen.
