@@ -51,6 +51,11 @@ fn tree(c: DVec2, leaves: usize, rng: &mut Rng) -> Object {
     Object::mesh(None, m, vec![trunk_prism], vec![outer])
 }
 
+/// The PVS of `c` by ext-proj with `params`.
+fn pvs(scene: &Arc<Scene>, params: Params, c: &ViewCell) -> Vec<u32> {
+    ExtProj::new(scene.clone(), params).pvs(c).expect("pvs")
+}
+
 fn forest(rows: usize, cols: usize, leaves: usize) -> Scene {
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     let mut objs = Vec::new();
@@ -67,17 +72,16 @@ fn forest(rows: usize, cols: usize, leaves: usize) -> Scene {
 fn sweep_is_conservative_and_never_adds_objects() {
     let scene = Arc::new(forest(5, 7, 300));
     let c: ViewCell = "0,-1,1.5,2,1,2".parse().expect("cell");
-    let plain = ExtProj::new(
-        scene.clone(),
+    let plain = pvs(
+        &scene,
         Params {
             resolution_px: 256,
             ..Params::default()
         },
-    )
-    .pvs(&c)
-    .expect("pvs");
-    let swept = ExtProj::new(
-        scene.clone(),
+        &c,
+    );
+    let swept = pvs(
+        &scene,
         Params {
             sweep: true,
             sweep_planes: 15,
@@ -85,9 +89,8 @@ fn sweep_is_conservative_and_never_adds_objects() {
             kernel_px: 9,
             ..Params::default()
         },
-    )
-    .pvs(&c)
-    .expect("pvs");
+        &c,
+    );
     assert!(
         swept.iter().all(|i| plain.contains(i)),
         "sweep adds nothing"
@@ -137,19 +140,16 @@ fn sweep_culls_the_dense_generated_forest_without_missing() {
         resolution_px: 512,
         ..Params::default()
     };
-    let plain = ExtProj::new(scene.clone(), params.clone())
-        .pvs(&c)
-        .expect("pvs");
-    let swept = ExtProj::new(
-        scene.clone(),
+    let plain = pvs(&scene, params.clone(), &c);
+    let swept = pvs(
+        &scene,
         Params {
             sweep: true,
             sweep_planes: 15,
             ..params
         },
-    )
-    .pvs(&c)
-    .expect("pvs");
+        &c,
+    );
     assert!(swept.iter().all(|i| plain.binary_search(i).is_ok()));
     let truth = ground_truth(
         &scene,
