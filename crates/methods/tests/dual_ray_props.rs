@@ -7,6 +7,7 @@
 
 use proptest::prelude::*;
 use sightline_geom::{DVec2, DVec3, Polygon, ViewCell};
+use sightline_methods::dual_ray::{DualRay, Planarity};
 use sightline_methods::{create, MethodOptions};
 use sightline_scene::{Object, Scene};
 use std::sync::Arc;
@@ -155,6 +156,26 @@ proptest! {
             let p = create("dual-ray", scene.clone(), &opts).unwrap().pvs(&cell).unwrap();
             for id in &exact {
                 prop_assert!(p.contains(id), "res {}: exact has {}, discrete {:?}", r, id, p);
+            }
+        }
+    }
+
+    /// The seed rays spare tests but change no PVS, and everything they report is in
+    /// the exact PVS (they follow real clear rays).
+    #[test]
+    fn seed_rays_change_no_pvs((boxes, cell) in city()) {
+        let scene = scene_of(&boxes);
+        for planarity in [Planarity::Exact, Planarity::Discrete { resolution_px: 32 }] {
+            let on = DualRay::new("dual-ray", scene.clone(), planarity);
+            let seeded = on.seed_objects(&cell);
+            let with = on.pvs_with_stats(&cell).0;
+            let without = DualRay::new("dual-ray", scene.clone(), planarity)
+                .with_seed(false)
+                .pvs_with_stats(&cell)
+                .0;
+            prop_assert_eq!(&with, &without);
+            for id in &seeded {
+                prop_assert!(without.contains(id), "seed reports {} not in {:?}", id, without);
             }
         }
     }

@@ -65,9 +65,24 @@ fn check_scene(name: &str, cells: usize) {
         scene.clone(),
         Planarity::Discrete { resolution_px: 128 },
     );
-    let mut culled = 0usize;
+    let unseeded = DualRay::new(
+        "dual-ray",
+        scene.clone(),
+        Planarity::Discrete { resolution_px: 128 },
+    )
+    .with_seed(false);
+    let (mut culled, mut seeded) = (0usize, 0usize);
     for c in street_cells(&scene, 20.0, cells) {
         let e = exact.pvs_with_stats(&c).0;
+        // The seed rays report only exact-PVS objects and change no PVS.
+        let seed = fine.seed_objects(&c);
+        for id in &seed {
+            assert!(
+                e.binary_search(id).is_ok(),
+                "{name} {c}: seed {id} not exact"
+            );
+        }
+        seeded += seed.len();
         let p16 = coarse.pvs_with_stats(&c).0;
         let p128 = fine.pvs_with_stats(&c).0;
         for id in &e {
@@ -93,9 +108,15 @@ fn check_scene(name: &str, cells: usize) {
                 );
             }
         }
+        assert_eq!(
+            p128,
+            unseeded.pvs_with_stats(&c).0,
+            "{name} {c}: seed changed the PVS"
+        );
         culled += scene.objects.len() - p128.len();
     }
     assert!(culled > 0, "{name}: nothing culled");
+    assert!(seeded > 0, "{name}: the seed rays met nothing");
 }
 
 #[test]

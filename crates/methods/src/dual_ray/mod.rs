@@ -23,6 +23,8 @@
 //! * [`discrete`] — §5.2 with exact union coverage per row (NOTES §2), most rows decided
 //!   by bit-parallel `u128` rows, refined with per-band lists of the pieces that matter;
 //! * [`exact`] — §5.1 with exact predicates;
+//! * [`seed`] — objects met first by rays from a few eyes of the cell are reported
+//!   without a test, and so are the kd-nodes holding them (it changes no PVS);
 //! * [`witness`] — a single ray verified clear (exact predicates) answers "visible"
 //!   without gathering the whole shaft; it changes no answer of either planar method.
 //!
@@ -59,6 +61,7 @@ pub mod exact;
 pub mod kdtree;
 pub mod occluders;
 pub mod plane;
+mod seed;
 mod table1;
 pub(crate) mod witness;
 
@@ -113,6 +116,8 @@ pub struct TraversalStats {
     pub visible: u64,
     /// Of which settled by a witness ray (without gathering the whole shaft).
     pub witnessed: u64,
+    /// Objects reported without a test: met first by a seed ray ([`seed`]).
+    pub seeded: u64,
 }
 
 /// The dual ray space method prepared for one scene.
@@ -127,6 +132,9 @@ pub struct DualRay {
     tree: KdTree,
     /// Objects without a usable bound: always reported.
     always: Vec<u32>,
+    /// Rays from eyes of the cell that report what they meet first.
+    seed: seed::SeedGrid,
+    use_seed: bool,
 }
 
 /// Prepare `dual-ray` or `dual-ray-exact` for `scene`.
@@ -170,9 +178,14 @@ impl DualRay {
         };
         let occ = occluders::collect_occluders(&scene, origin);
         let clusters = occluders::clusters(&occ);
-        let (decomp_x, decomp_y) = rayon::join(
-            || occluders::decompose(&occ, &clusters, Axis::X),
-            || occluders::decompose(&occ, &clusters, Axis::Y),
+        let ((decomp_x, decomp_y), seed) = rayon::join(
+            || {
+                rayon::join(
+                    || occluders::decompose(&occ, &clusters, Axis::X),
+                    || occluders::decompose(&occ, &clusters, Axis::Y),
+                )
+            },
+            || seed::SeedGrid::new(&scene, origin, &occ),
         );
         let o3 = origin.extend(0.0);
         let mut items = Vec::new();
@@ -208,7 +221,16 @@ impl DualRay {
             decomp_y,
             tree: KdTree::build(items),
             always,
+            seed,
+            use_seed: true,
         }
+    }
+
+    /// Turn the seed rays ([`seed`]) on or off (on by default). The PVS is the same
+    /// either way; off, every object and node is proven by its own test.
+    pub fn with_seed(mut self, on: bool) -> Self {
+        self.use_seed = on;
+        self
     }
 
     /// The planar algorithm in use.
@@ -228,15 +250,17 @@ impl DualRay {
         let mut scratch = Scratch::default();
         let mut stats = TraversalStats::default();
         let mut out: Vec<u32> = self.always.clone();
+        let (seen, node_seen) = self.seed_marks(&a, &mut stats);
         let mut stack: Vec<u32> = Vec::new();
         if !self.tree.nodes.is_empty() {
             stack.push(0);
         }
         while let Some(n) = stack.pop() {
             let node = &self.tree.nodes[n as usize];
+            let known = node_seen.get(n as usize).copied().unwrap_or(false);
             match node.kind {
                 NodeKind::Inner { left, right } => {
-                    if self.hidden(&a, &node.bbox, &mut scratch, &mut stats) {
+                    if !known && self.hidden(&a, &node.bbox, &mut scratch, &mut stats) {
                         continue;
                     }
                     stack.push(right);
@@ -245,14 +269,18 @@ impl DualRay {
                 NodeKind::Leaf { first, len } => {
                     let items = self.tree.leaf_items(first, len);
                     // A leaf of one box is the object's own test.
-                    if items.len() > 1 && self.hidden(&a, &node.bbox, &mut scratch, &mut stats) {
+                    if !known
+                        && items.len() > 1
+                        && self.hidden(&a, &node.bbox, &mut scratch, &mut stats)
+                    {
                         continue;
                     }
                     for (id, b) in items {
                         if out.last() == Some(id) {
                             continue;
                         }
-                        if !self.hidden(&a, b, &mut scratch, &mut stats) {
+                        let is_seen = seen.get(*id as usize).copied().unwrap_or(false);
+                        if is_seen || !self.hidden(&a, b, &mut scratch, &mut stats) {
                             out.push(*id);
                         }
                     }
@@ -262,6 +290,46 @@ impl DualRay {
         out.sort_unstable();
         out.dedup();
         (out, stats)
+    }
+
+    /// The objects the seed rays of `cell` meet first (sorted): reported without a test.
+    /// Every one of them is in the `dual-ray-exact` PVS of the cell.
+    pub fn seed_objects(&self, cell: &ViewCell) -> Vec<u32> {
+        let o3 = self.origin.extend(0.0);
+        let a = Aabb3::new(cell.min - o3, cell.max - o3);
+        let mut seen = vec![false; self.scene.objects.len()];
+        self.seed
+            .mark(&a, &mut seen, &mut seed::SeedScratch::default());
+        (0..seen.len() as u32)
+            .filter(|i| seen[*i as usize])
+            .collect()
+    }
+
+    /// The objects met first by the seed rays from `a` (local frame), and the kd-nodes
+    /// holding one of them (children come after their parent in `nodes`).
+    fn seed_marks(&self, a: &Aabb3, stats: &mut TraversalStats) -> (Vec<bool>, Vec<bool>) {
+        if !self.use_seed {
+            return (Vec::new(), Vec::new());
+        }
+        let mut seen = vec![false; self.scene.objects.len()];
+        stats.seeded = self
+            .seed
+            .mark(a, &mut seen, &mut seed::SeedScratch::default()) as u64;
+        let nodes = &self.tree.nodes;
+        let mut node_seen = vec![false; nodes.len()];
+        for n in (0..nodes.len()).rev() {
+            node_seen[n] = match nodes[n].kind {
+                NodeKind::Inner { left, right } => {
+                    node_seen[left as usize] || node_seen[right as usize]
+                }
+                NodeKind::Leaf { first, len } => self
+                    .tree
+                    .leaf_items(first, len)
+                    .iter()
+                    .any(|(id, _)| seen[*id as usize]),
+            };
+        }
+        (seen, node_seen)
     }
 
     /// The PVS of `cell` and of its 8 neighbours (the cells translated by ±1 cell size in

@@ -1,0 +1,516 @@
+//! Seeding a PVS with objects seen along single rays from a few eyes in the cell.
+//!
+//! On a street cell of a large city most box-to-box tests answer *visible* (the objects
+//! along the streets the cell opens onto and the kd-nodes holding them), and a visible
+//! answer is the most expensive one: the whole shaft, kilometres long, is gathered and
+//! refined down to the finest rows (§5.2 of Koltun et al. 2001). Yet most of these
+//! objects are seen from almost anywhere in the cell. So before the traversal we cast
+//! rays from a few eyes on the cell's top face, in many azimuths, through the same
+//! occluders the method uses (ground-based inner prisms), and accept every object a ray
+//! reaches first. The traversal then skips the tests of accepted objects and of the
+//! kd-nodes that contain one (a node holding a visible object is visible).
+//!
+//! **Why no PVS changes.** An accepted object `O` is met by a 3D ray from a point of the
+//! cell that passes strictly above every ground-based occluder before `O`'s outer prism
+//! (2.5D: along an azimuth, an occluder entered at distance `d` with top `h` blocks the
+//! elevations below `(h − z) / d`, and nothing else blocks in the method's model). That
+//! ray lies in a vertical plane through both boxes, so no planar problem of §4 can cover
+//! it: both `dual-ray-exact` and `dual-ray` report `O` and every node above it anyway.
+//! The seed only spares the proofs. Errors of rounding can only accept an object whose
+//! ray grazes an occluder: that object is kept, never dropped, so conservativeness does
+//! not depend on this module at all.
+//!
+//! Per azimuth the march stops once the running horizon is above what the tallest prism
+//! of the scene could reach further on, so azimuths into a facade cost a few buckets and
+//! only the ones along open streets run far.
+
+use super::occluders::{Occluder, GROUND_EPS_M};
+use sightline_geom::{Aabb3, DVec2};
+use sightline_scene::Scene;
+
+/// Candidate eyes per side of the cell's top face.
+const CANDIDATES_PER_SIDE: usize = 8;
+
+/// Eyes used, spread over the free candidates.
+const MAX_EYES: usize = 8;
+
+/// Uniform azimuths per eye.
+const AZIMUTHS: usize = 256;
+
+/// Rays added per eye by bisection, at most, down to this angle (radians).
+const REFINE_RAYS: usize = 6000;
+const MIN_AZIMUTH_STEP: f64 = 2e-5;
+
+/// Relative margin by which a ray must clear the horizon to count (rounding).
+const CLEAR_MARGIN: f64 = 1e-9;
+
+/// Per-thread buffers of [`SeedGrid::mark`].
+#[derive(Default)]
+pub(crate) struct SeedScratch {
+    stamp: Vec<u32>,
+    gen: u32,
+    events: Vec<(f64, u32)>,
+}
+
+/// One prism of the seed: an occluder (ground-based inner prism) or an occludee (an
+/// object's outer prism).
+#[derive(Clone, Copy, Debug)]
+struct Prism {
+    /// Edges `edges[first..first + len]`.
+    first: u32,
+    len: u32,
+    base: f64,
+    top: f64,
+    /// The object an occludee prism belongs to; `u32::MAX` for an occluder.
+    object: u32,
+}
+
+/// The prisms of a scene in a uniform grid, in the method's local frame.
+pub(crate) struct SeedGrid {
+    prisms: Vec<Prism>,
+    edges: Vec<[DVec2; 2]>,
+    origin: DVec2,
+    cell_m: f64,
+    nx: usize,
+    ny: usize,
+    /// CSR: bucket `i` holds `ids[start[i]..start[i + 1]]`.
+    start: Vec<u32>,
+    ids: Vec<u32>,
+    /// Tallest prism top.
+    max_top: f64,
+}
+
+impl SeedGrid {
+    /// Occluders (`occ`, local) and the outer prisms of every object of `scene`
+    /// (translated by `-origin`).
+    pub(crate) fn new(scene: &Scene, origin: DVec2, occ: &[Occluder]) -> Self {
+        let mut prisms = Vec::new();
+        let mut edges: Vec<[DVec2; 2]> = Vec::new();
+        let mut boxes: Vec<(DVec2, DVec2)> = Vec::new();
+        let mut push = |rings: &mut dyn Iterator<Item = Vec<DVec2>>,
+                        base: f64,
+                        top: f64,
+                        object: u32,
+                        prisms: &mut Vec<Prism>| {
+            let first = edges.len() as u32;
+            let mut min = DVec2::splat(f64::INFINITY);
+            let mut max = DVec2::splat(f64::NEG_INFINITY);
+            for r in rings {
+                for (i, a) in r.iter().enumerate() {
+                    let b = r[(i + 1) % r.len()];
+                    edges.push([*a, b]);
+                    min = min.min(*a);
+                    max = max.max(*a);
+                }
+            }
+            let len = edges.len() as u32 - first;
+            // Flat objects on the ground (streets, squares) are never reached above the
+            // ground by a ray, nor do they block one: they stay with the tests.
+            if len >= 3
+                && min.is_finite()
+                && max.is_finite()
+                && top.is_finite()
+                && top > GROUND_EPS_M
+            {
+                prisms.push(Prism {
+                    first,
+                    len,
+                    base,
+                    top,
+                    object,
+                });
+                boxes.push((min, max));
+            } else {
+                edges.truncate(first as usize);
+            }
+        };
+        for o in occ {
+            let mut rings = o.rings.iter().cloned();
+            push(&mut rings, 0.0, o.height, u32::MAX, &mut prisms);
+        }
+        for (id, o) in scene.objects.iter().enumerate() {
+            for p in &o.outer {
+                let mut rings = p
+                    .footprint
+                    .rings()
+                    .filter(|r| r.len() >= 3)
+                    .map(|r| r.iter().map(|v| *v - origin).collect::<Vec<_>>());
+                push(&mut rings, p.base, p.top, id as u32, &mut prisms);
+            }
+        }
+        let mut min = DVec2::splat(f64::INFINITY);
+        let mut max = DVec2::splat(f64::NEG_INFINITY);
+        for (a, b) in &boxes {
+            min = min.min(*a);
+            max = max.max(*b);
+        }
+        if boxes.is_empty() {
+            min = DVec2::ZERO;
+            max = DVec2::ONE;
+        }
+        let ext = (max - min).max(DVec2::splat(1.0));
+        // About two prisms per bucket, at most 4096 buckets per side.
+        let per = (ext.x * ext.y / boxes.len().max(1) as f64).sqrt() * 1.5;
+        let cell_m = per.max(ext.x.max(ext.y) / 4096.0).max(4.0);
+        let nx = ((ext.x / cell_m).ceil() as usize).max(1);
+        let ny = ((ext.y / cell_m).ceil() as usize).max(1);
+        let mut g = SeedGrid {
+            max_top: prisms.iter().map(|p| p.top).fold(0.0, f64::max),
+            prisms,
+            edges,
+            origin: min,
+            cell_m,
+            nx,
+            ny,
+            start: vec![0; nx * ny + 1],
+            ids: Vec::new(),
+        };
+        let range = |g: &SeedGrid, (a, b): &(DVec2, DVec2)| {
+            (g.col(a.x), g.col(b.x), g.row(a.y), g.row(b.y))
+        };
+        for bx in &boxes {
+            let (c0, c1, r0, r1) = range(&g, bx);
+            for r in r0..=r1 {
+                for c in c0..=c1 {
+                    g.start[r * nx + c + 1] += 1;
+                }
+            }
+        }
+        for i in 0..nx * ny {
+            g.start[i + 1] += g.start[i];
+        }
+        let mut fill = g.start.clone();
+        g.ids = vec![0; g.start[nx * ny] as usize];
+        for (id, bx) in boxes.iter().enumerate() {
+            let (c0, c1, r0, r1) = range(&g, bx);
+            for r in r0..=r1 {
+                for c in c0..=c1 {
+                    let b = r * nx + c;
+                    g.ids[fill[b] as usize] = id as u32;
+                    fill[b] += 1;
+                }
+            }
+        }
+        g
+    }
+
+    #[inline]
+    fn col(&self, x: f64) -> usize {
+        (((x - self.origin.x) / self.cell_m).floor().max(0.0) as usize).min(self.nx - 1)
+    }
+
+    #[inline]
+    fn row(&self, y: f64) -> usize {
+        (((y - self.origin.y) / self.cell_m).floor().max(0.0) as usize).min(self.ny - 1)
+    }
+
+    #[inline]
+    fn bucket(&self, c: usize, r: usize) -> &[u32] {
+        let i = r * self.nx + c;
+        &self.ids[self.start[i] as usize..self.start[i + 1] as usize]
+    }
+
+    fn prism_edges(&self, p: &Prism) -> &[[DVec2; 2]] {
+        &self.edges[p.first as usize..(p.first + p.len) as usize]
+    }
+
+    /// Whether `q` is inside or on the boundary of any prism's footprint: an eye there
+    /// is inside it or above or below it, where the first edge a ray crosses is not its
+    /// entry; such eyes are skipped.
+    fn occupied(&self, q: DVec2) -> bool {
+        self.bucket(self.col(q.x), self.row(q.y)).iter().any(|&i| {
+            let edges = self.prism_edges(&self.prisms[i as usize]);
+            let mut inside = false;
+            for [a, b] in edges {
+                if (*b - *a).perp_dot(q - *a) == 0.0
+                    && q.x >= a.x.min(b.x)
+                    && q.x <= a.x.max(b.x)
+                    && q.y >= a.y.min(b.y)
+                    && q.y <= a.y.max(b.y)
+                {
+                    return true;
+                }
+                if (a.y > q.y) != (b.y > q.y) && q.x < a.x + (q.y - a.y) * (b.x - a.x) / (b.y - a.y)
+                {
+                    inside = !inside;
+                }
+            }
+            inside
+        })
+    }
+
+    /// Mark in `seen` every object reached first by a ray from one of the eyes on the
+    /// top face of `cell` (local frame). Returns the number of objects marked.
+    pub(crate) fn mark(&self, cell: &Aabb3, seen: &mut [bool], s: &mut SeedScratch) -> usize {
+        if s.stamp.len() != self.prisms.len() {
+            s.stamp = vec![0; self.prisms.len()];
+            s.gen = 0;
+        }
+        let z = cell.max.z;
+        let mut count = 0;
+        for eye in self.eyes(cell) {
+            let mut ray = |a: f64, seen: &mut [bool], s: &mut SeedScratch| {
+                let (m, sig) = self.march(eye, z, DVec2::new(a.cos(), a.sin()), seen, s);
+                count += m;
+                sig
+            };
+            // Uniform azimuths, then bisection between neighbours whose horizons were
+            // raised by different occluders (facades along a long street are seen at
+            // grazing angles, thinner than any uniform step).
+            let step = std::f64::consts::TAU / AZIMUTHS as f64;
+            let sigs: Vec<u64> = (0..AZIMUTHS)
+                .map(|k| ray(k as f64 * step, seen, s))
+                .collect();
+            let mut budget = REFINE_RAYS;
+            let mut stack: Vec<(f64, u64, f64, u64)> = (0..AZIMUTHS)
+                .map(|k| {
+                    (
+                        k as f64 * step,
+                        sigs[k],
+                        (k + 1) as f64 * step,
+                        sigs[(k + 1) % AZIMUTHS],
+                    )
+                })
+                .collect();
+            while let Some((a0, s0, a1, s1)) = stack.pop() {
+                if s0 == s1 || a1 - a0 < MIN_AZIMUTH_STEP || budget == 0 {
+                    continue;
+                }
+                budget -= 1;
+                let am = 0.5 * (a0 + a1);
+                let sm = ray(am, seen, s);
+                stack.push((a0, s0, am, sm));
+                stack.push((am, sm, a1, s1));
+            }
+        }
+        count
+    }
+
+    /// Up to [`MAX_EYES`] points of the top face of `cell` outside every footprint,
+    /// spread out (farthest point first, starting next to the centre).
+    fn eyes(&self, cell: &Aabb3) -> Vec<DVec2> {
+        let n = CANDIDATES_PER_SIDE;
+        let f = |k: usize| (k as f64 + 0.5) / n as f64;
+        let mut free: Vec<DVec2> = (0..n * n)
+            .map(|k| {
+                DVec2::new(
+                    cell.min.x + (cell.max.x - cell.min.x) * f(k % n),
+                    cell.min.y + (cell.max.y - cell.min.y) * f(k / n),
+                )
+            })
+            .filter(|q| q.is_finite() && !self.occupied(*q))
+            .collect();
+        let centre = cell.center().truncate();
+        let mut eyes = Vec::new();
+        let mut dist: Vec<f64> = free.iter().map(|q| -q.distance(centre)).collect();
+        while eyes.len() < MAX_EYES && !free.is_empty() {
+            let (i, _) = dist
+                .iter()
+                .enumerate()
+                .max_by(|a, b| a.1.total_cmp(b.1))
+                .expect("non-empty");
+            let e = free.swap_remove(i);
+            dist.swap_remove(i);
+            for (q, d) in free.iter().zip(dist.iter_mut()) {
+                let to_e = q.distance(e);
+                *d = if eyes.is_empty() { to_e } else { d.min(to_e) };
+            }
+            eyes.push(e);
+        }
+        eyes
+    }
+
+    /// One azimuth: walk the buckets along the ray from `eye` in direction `d`, in order,
+    /// keeping the horizon (the highest blocked slope) of the occluders entered so far.
+    fn march(
+        &self,
+        eye: DVec2,
+        z: f64,
+        d: DVec2,
+        seen: &mut [bool],
+        s: &mut SeedScratch,
+    ) -> (usize, u64) {
+        let mut sig: u64 = 0xcbf2_9ce4_8422_2325;
+        s.gen = s.gen.wrapping_add(1);
+        if s.gen == 0 {
+            s.stamp.fill(0);
+            s.gen = 1;
+        }
+        let gen = s.gen;
+        let mut marked = 0;
+        let mut horizon = f64::NEG_INFINITY;
+        // Start where the ray enters the grid (an eye may stand outside it).
+        let hi = self.origin + DVec2::new(self.nx as f64, self.ny as f64) * self.cell_m;
+        let (mut t_in, mut t_out) = (0.0f64, f64::INFINITY);
+        for (p, dd, lo, hi) in [
+            (eye.x, d.x, self.origin.x, hi.x),
+            (eye.y, d.y, self.origin.y, hi.y),
+        ] {
+            if dd == 0.0 {
+                if p < lo || p >= hi {
+                    return (0, sig);
+                }
+            } else {
+                let (a, b) = ((lo - p) / dd, (hi - p) / dd);
+                t_in = t_in.max(a.min(b));
+                t_out = t_out.min(a.max(b));
+            }
+        }
+        if t_in >= t_out {
+            return (0, sig);
+        }
+        let start = eye + d * t_in;
+        let (mut c, mut r) = (self.col(start.x) as i64, self.row(start.y) as i64);
+        let step_c: i64 = if d.x > 0.0 { 1 } else { -1 };
+        let step_r: i64 = if d.y > 0.0 { 1 } else { -1 };
+        let next = |idx: i64, step: i64, o: f64, p: f64, dd: f64| -> f64 {
+            if dd == 0.0 {
+                return f64::INFINITY;
+            }
+            let edge = o + (idx + i64::from(step > 0)) as f64 * self.cell_m;
+            ((edge - p) / dd).max(0.0)
+        };
+        let mut t_c = next(c, step_c, self.origin.x, eye.x, d.x);
+        let mut t_r = next(r, step_r, self.origin.y, eye.y, d.y);
+        let dt_c = if d.x == 0.0 {
+            f64::INFINITY
+        } else {
+            self.cell_m / d.x.abs()
+        };
+        let dt_r = if d.y == 0.0 {
+            f64::INFINITY
+        } else {
+            self.cell_m / d.y.abs()
+        };
+        let mut t0 = t_in;
+        loop {
+            let t1 = t_c.min(t_r);
+            if t0 > 0.0 && horizon >= (self.max_top - z) / t0 {
+                break; // nothing further can rise above the horizon
+            }
+            let events = &mut s.events;
+            events.clear();
+            for &i in self.bucket(c as usize, r as usize) {
+                if s.stamp[i as usize] == gen {
+                    continue;
+                }
+                let p = &self.prisms[i as usize];
+                if p.object != u32::MAX && seen[p.object as usize] {
+                    continue;
+                }
+                let Some(t) = entry(self.prism_edges(p), eye, d) else {
+                    s.stamp[i as usize] = gen; // the ray never enters it
+                    continue;
+                };
+                // A prism is handled in the first bucket reached at or after the ray's
+                // entry into it (an entry rounded into the previous bucket comes late).
+                if t < t1 {
+                    s.stamp[i as usize] = gen;
+                    events.push((t, i));
+                }
+            }
+            // Occludees before occluders at the same distance: an object's own inner
+            // prism does not hide its outer wall.
+            events.sort_unstable_by(|a, b| {
+                a.0.total_cmp(&b.0).then_with(|| {
+                    let oa = self.prisms[a.1 as usize].object == u32::MAX;
+                    let ob = self.prisms[b.1 as usize].object == u32::MAX;
+                    oa.cmp(&ob)
+                })
+            });
+            for &(t, i) in events.iter() {
+                let p = &self.prisms[i as usize];
+                let slope_top = (p.top - z) / t;
+                if p.object == u32::MAX {
+                    if slope_top > horizon {
+                        horizon = slope_top;
+                        sig = (sig ^ u64::from(i)).wrapping_mul(0x0100_0000_01b3);
+                    }
+                    continue;
+                }
+                let low = horizon.max((p.base - z) / t).max(-z / t);
+                if slope_top > low + CLEAR_MARGIN * (1.0 + low.abs()) && !seen[p.object as usize] {
+                    seen[p.object as usize] = true;
+                    marked += 1;
+                }
+            }
+            if !t1.is_finite() {
+                break;
+            }
+            if t_c < t_r {
+                c += step_c;
+                t_c += dt_c;
+            } else {
+                r += step_r;
+                t_r += dt_r;
+            }
+            if c < 0 || r < 0 || c >= self.nx as i64 || r >= self.ny as i64 {
+                break;
+            }
+            t0 = t1;
+        }
+        (marked, sig)
+    }
+}
+
+/// Distance along the ray `eye + t·d` (t > 0) to the first crossing of an edge.
+fn entry(edges: &[[DVec2; 2]], eye: DVec2, d: DVec2) -> Option<f64> {
+    let mut best = f64::INFINITY;
+    for [a, b] in edges {
+        let e = *b - *a;
+        let den = d.perp_dot(e);
+        if den == 0.0 {
+            continue;
+        }
+        let w = *a - eye;
+        let t = w.perp_dot(e) / den;
+        let s = w.perp_dot(d) / den;
+        if t > 0.0 && (0.0..=1.0).contains(&s) && t < best {
+            best = t;
+        }
+    }
+    best.is_finite().then_some(best)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::occluders::collect_occluders;
+    use super::*;
+    use sightline_geom::{DVec3, Polygon};
+    use sightline_scene::Object;
+
+    fn marks(scene: &Scene, cell: Aabb3) -> Vec<bool> {
+        let occ = collect_occluders(scene, DVec2::ZERO);
+        let g = SeedGrid::new(scene, DVec2::ZERO, &occ);
+        let mut seen = vec![false; scene.objects.len()];
+        g.mark(&cell, &mut seen, &mut SeedScratch::default());
+        seen
+    }
+
+    #[test]
+    fn a_wall_hides_the_low_house_behind_it_but_not_the_tower() {
+        let r = |x0, y0, x1, y1| Polygon::rect(DVec2::new(x0, y0), DVec2::new(x1, y1));
+        let scene = Scene::from_objects(vec![
+            Object::block(None, r(20.0, -50.0, 22.0, 50.0), 0.0, 10.0),
+            Object::block(None, r(40.0, 0.0, 50.0, 10.0), 0.0, 6.0),
+            Object::block(None, r(40.0, 20.0, 50.0, 30.0), 0.0, 40.0),
+        ]);
+        let cell = Aabb3::new(DVec3::new(0.0, 0.0, 1.5), DVec3::new(10.0, 10.0, 2.0));
+        assert_eq!(marks(&scene, cell), vec![true, false, true]);
+    }
+
+    #[test]
+    fn an_eye_inside_the_grid_sees_along_the_street_only() {
+        let r = |x0, y0, x1, y1| Polygon::rect(DVec2::new(x0, y0), DVec2::new(x1, y1));
+        // A street along x between two rows; a far house in the street's axis, one
+        // behind the north row.
+        let scene = Scene::from_objects(vec![
+            Object::block(None, r(-100.0, 10.0, 300.0, 30.0), 0.0, 20.0),
+            Object::block(None, r(-100.0, -30.0, 300.0, -10.0), 0.0, 20.0),
+            Object::block(None, r(400.0, -5.0, 410.0, 5.0), 0.0, 5.0),
+            Object::block(None, r(100.0, 40.0, 110.0, 50.0), 0.0, 5.0),
+        ]);
+        let cell = Aabb3::new(DVec3::new(0.0, -5.0, 1.5), DVec3::new(10.0, 5.0, 2.0));
+        assert_eq!(marks(&scene, cell), vec![true, true, true, false]);
+    }
+}
