@@ -76,6 +76,8 @@ pub(crate) struct SeedGrid {
     /// CSR: bucket `i` holds `ids[start[i]..start[i + 1]]`.
     start: Vec<u32>,
     ids: Vec<u32>,
+    /// Tallest prism top per bucket.
+    bucket_top: Vec<f64>,
     /// Tallest prism top.
     max_top: f64,
 }
@@ -164,6 +166,7 @@ impl SeedGrid {
             ny,
             start: vec![0; nx * ny + 1],
             ids: Vec::new(),
+            bucket_top: vec![f64::NEG_INFINITY; nx * ny],
         };
         let range = |g: &SeedGrid, (a, b): &(DVec2, DVec2)| {
             (g.col(a.x), g.col(b.x), g.row(a.y), g.row(b.y))
@@ -188,6 +191,7 @@ impl SeedGrid {
                     let b = r * nx + c;
                     g.ids[fill[b] as usize] = id as u32;
                     fill[b] += 1;
+                    g.bucket_top[b] = g.bucket_top[b].max(g.prisms[id].top);
                 }
             }
         }
@@ -390,7 +394,14 @@ impl SeedGrid {
             }
             let events = &mut s.events;
             events.clear();
-            for &i in self.bucket(c as usize, r as usize) {
+            let b = r as usize * self.nx + c as usize;
+            // A bucket whose tallest prism stays under the horizon changes nothing.
+            let bucket = if t0 > 0.0 && horizon >= (self.bucket_top[b] - z) / t0 {
+                &[][..]
+            } else {
+                self.bucket(c as usize, r as usize)
+            };
+            for &i in bucket {
                 if s.stamp[i as usize] == gen {
                     continue;
                 }
