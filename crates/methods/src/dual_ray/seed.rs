@@ -49,7 +49,7 @@ const CLEAR_MARGIN: f64 = 1e-9;
 pub(crate) struct SeedScratch {
     stamp: Vec<u32>,
     gen: u32,
-    events: Vec<(f64, u32)>,
+    events: Vec<(f64, f64, u32)>,
 }
 
 /// One prism of the seed: an occluder (ground-based inner prism) or an occludee (an
@@ -389,14 +389,19 @@ impl SeedGrid {
         let mut t0 = t_in;
         loop {
             let t1 = t_c.min(t_r);
-            if t0 > 0.0 && horizon >= (self.max_top - z) / t0 {
-                break; // nothing further can rise above the horizon
+            // Nothing further can rise above the horizon (a prism under the eye has a
+            // negative slope, below a horizon ≥ 0).
+            if t0 > 0.0 && horizon >= 0.0 && horizon >= (self.max_top - z) / t0 {
+                break;
             }
             let events = &mut s.events;
             events.clear();
             let b = r as usize * self.nx + c as usize;
-            // A bucket whose tallest prism stays under the horizon changes nothing.
-            let bucket = if t0 > 0.0 && horizon >= (self.bucket_top[b] - z) / t0 {
+            // A bucket whose tallest prism stays under the horizon changes nothing (the
+            // slope to a top under the eye is highest at the bucket's far end).
+            let top = self.bucket_top[b] - z;
+            let reach = if top >= 0.0 { top / t0 } else { top / t1 };
+            let bucket = if t0 > 0.0 && horizon >= reach {
                 &[][..]
             } else {
                 self.bucket(c as usize, r as usize)
@@ -409,7 +414,7 @@ impl SeedGrid {
                 if p.object != u32::MAX && seen[p.object as usize] {
                     continue;
                 }
-                let Some(t) = entry(self.prism_edges(p), eye, d) else {
+                let Some((t, t_last)) = crossings(self.prism_edges(p), eye, d) else {
                     s.stamp[i as usize] = gen; // the ray never enters it
                     continue;
                 };
@@ -417,22 +422,29 @@ impl SeedGrid {
                 // entry into it (an entry rounded into the previous bucket comes late).
                 if t < t1 {
                     s.stamp[i as usize] = gen;
-                    events.push((t, i));
+                    events.push((t, t_last, i));
                 }
             }
             // Occludees before occluders at the same distance: an object's own inner
             // prism does not hide its outer wall.
             events.sort_unstable_by(|a, b| {
                 a.0.total_cmp(&b.0).then_with(|| {
-                    let oa = self.prisms[a.1 as usize].object == u32::MAX;
-                    let ob = self.prisms[b.1 as usize].object == u32::MAX;
+                    let oa = self.prisms[a.2 as usize].object == u32::MAX;
+                    let ob = self.prisms[b.2 as usize].object == u32::MAX;
                     oa.cmp(&ob)
                 })
             });
-            for &(t, i) in events.iter() {
+            for &(t, t_last, i) in events.iter() {
                 let p = &self.prisms[i as usize];
                 let slope_top = (p.top - z) / t;
                 if p.object == u32::MAX {
+                    // An occluder below the eye blocks the descending rays that reach
+                    // its top anywhere over it: up to the slope to its far side.
+                    let slope_top = if p.top < z {
+                        (p.top - z) / t_last
+                    } else {
+                        slope_top
+                    };
                     if slope_top > horizon {
                         horizon = slope_top;
                         sig = (sig ^ u64::from(i)).wrapping_mul(0x0100_0000_01b3);
@@ -464,9 +476,11 @@ impl SeedGrid {
     }
 }
 
-/// Distance along the ray `eye + t·d` (t > 0) to the first crossing of an edge.
-fn entry(edges: &[[DVec2; 2]], eye: DVec2, d: DVec2) -> Option<f64> {
+/// Distances along the ray `eye + t·d` (t > 0) to the first and the last crossing of an
+/// edge.
+fn crossings(edges: &[[DVec2; 2]], eye: DVec2, d: DVec2) -> Option<(f64, f64)> {
     let mut best = f64::INFINITY;
+    let mut last = f64::NEG_INFINITY;
     for [a, b] in edges {
         let e = *b - *a;
         let den = d.perp_dot(e);
@@ -476,11 +490,12 @@ fn entry(edges: &[[DVec2; 2]], eye: DVec2, d: DVec2) -> Option<f64> {
         let w = *a - eye;
         let t = w.perp_dot(e) / den;
         let s = w.perp_dot(d) / den;
-        if t > 0.0 && (0.0..=1.0).contains(&s) && t < best {
-            best = t;
+        if t > 0.0 && (0.0..=1.0).contains(&s) {
+            best = best.min(t);
+            last = last.max(t);
         }
     }
-    best.is_finite().then_some(best)
+    best.is_finite().then_some((best, last))
 }
 
 #[cfg(test)]
@@ -523,5 +538,20 @@ mod tests {
         ]);
         let cell = Aabb3::new(DVec3::new(0.0, -5.0, 1.5), DVec3::new(10.0, 5.0, 2.0));
         assert_eq!(marks(&scene, cell), vec![true, true, true, false]);
+    }
+
+    #[test]
+    fn a_wall_under_the_eye_hides_what_stands_low_behind_it() {
+        // Eyes at 2 m look down over a 1.5 m wall 3 m thick: a 1.3 m shed 1 m behind it
+        // is hidden (every ray over the wall's far edge is still above 1.3 m there); a
+        // 1.8 m one further on is seen.
+        let r = |x0, y0, x1, y1| Polygon::rect(DVec2::new(x0, y0), DVec2::new(x1, y1));
+        let scene = Scene::from_objects(vec![
+            Object::block(None, r(10.0, -50.0, 13.0, 50.0), 0.0, 1.5),
+            Object::block(None, r(14.0, -1.0, 15.0, 1.0), 0.0, 1.3),
+            Object::block(None, r(40.0, -1.0, 41.0, 1.0), 0.0, 1.8),
+        ]);
+        let cell = Aabb3::new(DVec3::new(0.0, -2.0, 1.5), DVec3::new(5.0, 2.0, 2.0));
+        assert_eq!(marks(&scene, cell), vec![true, false, true]);
     }
 }
