@@ -199,11 +199,7 @@ impl ErosionMethod {
         let mut c = self.cache.lock().unwrap_or_else(|e| e.into_inner());
         let tick = c.0;
         c.1.insert(key, (g.clone(), tick));
-        let bytes = |m: &ErodedCache| -> usize {
-            m.values()
-                .flat_map(|(g, _)| g.levels.iter().map(|l| l.data.len() * 2))
-                .sum()
-        };
+        let bytes = |m: &ErodedCache| -> usize { m.values().map(|(g, _)| g.bytes()).sum() };
         while c.1.len() > 1 && bytes(&c.1) > CACHE_BYTES {
             let oldest = c.1.iter().min_by_key(|(_, v)| v.1).map(|(k, _)| *k);
             if let Some(k) = oldest {
@@ -377,19 +373,28 @@ impl ErosionMethod {
     ) {
         let coarse = self.bins / COARSE_FACTOR;
         if coarse < 64 {
-            self.decide_at(self.bins, cell, rect, undecided, visible);
+            self.decide_at(self.bins, cell, rect, undecided, visible, None);
             return;
         }
         let mut maybe = Vec::new();
-        self.decide_at(coarse, cell, rect, undecided, &mut maybe);
+        let coarse_maps = self.decide_at(coarse, cell, rect, undecided, &mut maybe, None);
         let mut hidden = std::mem::take(undecided);
-        self.decide_at(self.bins, cell, rect, &mut maybe, visible);
+        self.decide_at(
+            self.bins,
+            cell,
+            rect,
+            &mut maybe,
+            visible,
+            Some(&coarse_maps),
+        );
         hidden.append(&mut maybe);
         hidden.sort_unstable();
         *undecided = hidden;
     }
 
-    /// [`Self::decide`] with `bins` azimuth bins.
+    /// [`Self::decide`] with `bins` azimuth bins; the maps of a pass with fewer bins
+    /// from the same eye, if given, seed the new maps with their blockers
+    /// ([`PolarMap::seeded`]). Returns the maps built.
     fn decide_at(
         &self,
         bins: usize,
@@ -397,7 +402,8 @@ impl ErosionMethod {
         rect: Aabb2,
         undecided: &mut Vec<u32>,
         visible: &mut Vec<u32>,
-    ) {
+        seeds: Option<&HashMap<Element, PolarMap>>,
+    ) -> HashMap<Element, PolarMap> {
         let ctx = CellCtx {
             rect,
             half: rect.size() * 0.5,
@@ -420,7 +426,10 @@ impl ErosionMethod {
         for (_, tests) in &pending {
             for t in tests {
                 maps.entry(t.element)
-                    .or_insert_with(|| PolarMap::new(ctx.bins.clone()))
+                    .or_insert_with(|| match seeds.and_then(|s| s.get(&t.element)) {
+                        Some(coarse) => PolarMap::seeded(ctx.bins.clone(), coarse),
+                        None => PolarMap::new(ctx.bins.clone()),
+                    })
                     .need(&t.target, t.eye, t.t);
             }
         }
@@ -443,6 +452,7 @@ impl ErosionMethod {
                 visible.push(id);
             }
         }
+        maps
     }
 
     /// Build the occlusion map of `element` from the cell centre.
