@@ -268,8 +268,8 @@ impl PolarMap {
     /// bin and than the blockers already found no farther. So a run of consecutive
     /// sectors is skipped at once when an *upper* bound of the raster over the run's
     /// bounding box ([`MinPyramid::max_over`]) is no higher: no sector of the run could
-    /// have given a blocker. Runs double while they succeed and restart at one sector
-    /// after a failure; the sectors are those of the one-by-one march, and the early
+    /// have given a blocker. Runs double while they succeed, halve at each failure and
+    /// restart at one sector after a new blocker; the sectors are those of the one-by-one march, and the early
     /// stop is checked at the end of a skipped run (its condition only grows with the
     /// radius and no blocker was added inside), so the blockers are exactly those of the
     /// one-by-one march (`march_one_by_one`, kept for the tests).
@@ -317,6 +317,8 @@ impl PolarMap {
                             run = (run * 2).min(1 << 12);
                             continue;
                         }
+                        // Shorter runs from here on (halved at each failure).
+                        run /= 2;
                     }
                 }
                 // One sector, as the one-by-one march.
@@ -328,7 +330,7 @@ impl PolarMap {
                     best = Some((r + EPS_M, h));
                     run = 1;
                 } else {
-                    run = 2;
+                    run = run.max(2);
                 }
                 if let Some((ra, h)) = best {
                     if h > e && (top - e) * ra < (h - e) * r1 {
