@@ -1,6 +1,10 @@
 //! Phase timings of the erosion methods on a scene: `cargo run --release -p
 //! sightline-methods --example erosion_timing -- SCENE [CELL_SIZE] [CELLS] [METHODS]`
-//! (METHODS: comma-separated, default all five).
+//! (METHODS: comma-separated, default all five; CELLS may be a cells.json of
+//! `erosion_street_cells`). With `EROSION_WARM=1` every cell is run once before the
+//! timed run, so that the eroded occluders of every cell shape and fill threshold are
+//! cached (§5.1: a preprocessing shared by all cells of a grid) and the times are
+//! those of the per-cell tests alone.
 
 use sightline_geom::{DVec2, ViewCell};
 use sightline_methods::{create, MethodOptions};
@@ -14,7 +18,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .get(1)
         .ok_or("usage: erosion_timing SCENE [SIZE] [CELLS] [METHODS]")?;
     let size: f64 = args.get(2).map_or(Ok(25.0), |s| s.parse())?;
-    let count: usize = args.get(3).map_or(Ok(10), |s| s.parse())?;
+    let cells_arg = args.get(3).map_or("10", |s| s.as_str());
     let t = Instant::now();
     let scene = Arc::new(load(std::path::Path::new(path), &ImportOptions::default())?);
     println!(
@@ -25,6 +29,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let b = scene.bounds;
     let c = (b.min.truncate() + b.max.truncate()) * 0.5;
     let mut cells = Vec::new();
+    let count: usize = if cells_arg.ends_with(".json") {
+        // A JSON array of `[x0, y0, z0, x1, y1, z1]` rows, one per line.
+        for line in std::fs::read_to_string(cells_arg)?.lines() {
+            let t = line.trim().trim_end_matches(',');
+            if !t.starts_with("[[") && t.starts_with('[') && t.ends_with(']') {
+                let v = t[1..t.len() - 1]
+                    .split(',')
+                    .map(|x| x.trim().parse::<f64>())
+                    .collect::<Result<Vec<f64>, _>>()?;
+                let a: [f64; 6] = v.try_into().map_err(|_| "a cell needs 6 numbers")?;
+                cells.push(ViewCell::from_array(a)?);
+            }
+        }
+        cells.len()
+    } else {
+        cells_arg.parse()?
+    };
     let mut k = 0i64;
     while cells.len() < count && k < 10_000 {
         let (i, j) = ((k * 7919) % 41 - 20, (k * 104_729) % 41 - 20);
@@ -65,6 +86,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let t = Instant::now();
         let first = method.pvs(&cells[0])?.len();
         let first_s = t.elapsed().as_secs_f64();
+        if std::env::var("EROSION_WARM").is_ok_and(|v| v == "1") {
+            for cell in &cells {
+                method.pvs(cell)?;
+            }
+        }
         let mut ms = Vec::new();
         let mut lens = Vec::new();
         for cell in &cells {

@@ -57,6 +57,22 @@ fn thick_block_hides_what_is_low_behind_it() {
 }
 
 #[test]
+fn a_terrace_thinner_than_a_third_level_quarter_hides_with_the_fourth() {
+    // A row of 3 m deep, 20 m high terraced houses beside a 25 m cell: eroded by the
+    // 3.1 m quarters of the third level it is empty, by the 1.6 m quarters of the
+    // fourth (RAYS_MAX_DEPTH) it keeps a core that hides the low house behind it.
+    let scene = Arc::new(Scene::from_objects(vec![
+        Object::rect_block(30.0, -60.0, 33.0, 85.0, 20.0),
+        Object::rect_block(40.0, 5.0, 50.0, 20.0, 5.0),
+    ]));
+    let c = cell(0.0, 0.0, 25.0, 25.0);
+    let p = rays(&scene).pvs(&c).expect("pvs");
+    assert_eq!(p, vec![0], "the house behind the terrace is hidden");
+    let vs = sampled_visible(&scene, &c, 5);
+    assert!(missed(&p, &vs).is_empty(), "misses {:?}", missed(&p, &vs));
+}
+
+#[test]
 fn thin_wall_vanishes_in_the_erosion_by_the_cell() {
     // Theorem 1's price, as for `erosion-cell`: a 1 m wall eroded by a 10 m cell (and
     // by its 1.25 m deepest quarters) is empty, so what is behind it stays visible.

@@ -124,48 +124,104 @@ impl Grid {
 
 /// A raster with its min-pyramid: level `L` holds the least value of each block of
 /// `2^L × 2^L` pixels, so that the minimum over a large rectangle costs a few reads
-/// (a coarser block covers more pixels: a lower, still conservative bound).
+/// (a coarser block covers more pixels: a lower, still conservative bound); and its
+/// max-pyramid (the greatest value of each block), an upper bound of every `min_over`
+/// inside a rectangle, with which the occlusion march skips in a few reads long runs
+/// of sectors that cannot give a blocker.
 #[derive(Clone, Debug)]
 pub struct MinPyramid {
     pub levels: Vec<Grid>,
+    /// `max_levels[L]`: the greatest value of each `2^L × 2^L` block (level 0 is
+    /// `levels[0]`, not stored twice).
+    pub max_levels: Vec<Grid>,
+}
+
+/// The next level of a pyramid: `f` of each 2 × 2 block (reads outside give 0).
+fn reduce(last: &Grid, f: impl Fn(u16, u16) -> u16) -> Grid {
+    let (nx, ny) = ((last.nx + 1) / 2, (last.ny + 1) / 2);
+    let mut g = Grid::zeros(last.origin, last.pixel_m * 2.0, nx, ny);
+    for j in 0..ny {
+        for i in 0..nx {
+            let m = f(
+                f(last.get(2 * i, 2 * j), last.get(2 * i + 1, 2 * j)),
+                f(last.get(2 * i, 2 * j + 1), last.get(2 * i + 1, 2 * j + 1)),
+            );
+            g.data[(j * nx + i) as usize] = m;
+        }
+    }
+    g
 }
 
 impl MinPyramid {
     pub fn new(base: Grid) -> Self {
         let mut levels = vec![base];
+        let mut max_levels: Vec<Grid> = Vec::new();
         while let Some(last) = levels.last() {
             if last.nx <= 1 && last.ny <= 1 || levels.len() >= 12 {
                 break;
             }
-            let (nx, ny) = ((last.nx + 1) / 2, (last.ny + 1) / 2);
-            let mut g = Grid::zeros(last.origin, last.pixel_m * 2.0, nx, ny);
-            for j in 0..ny {
-                for i in 0..nx {
-                    let m = last
-                        .get(2 * i, 2 * j)
-                        .min(last.get(2 * i + 1, 2 * j))
-                        .min(last.get(2 * i, 2 * j + 1))
-                        .min(last.get(2 * i + 1, 2 * j + 1));
-                    g.data[(j * nx + i) as usize] = m;
-                }
-            }
+            let g = reduce(last, u16::min);
+            let m = reduce(max_levels.last().unwrap_or(&levels[0]), u16::max);
             levels.push(g);
+            max_levels.push(m);
         }
-        MinPyramid { levels }
+        MinPyramid { levels, max_levels }
+    }
+
+    /// Bytes held (for the cache bound).
+    pub fn bytes(&self) -> usize {
+        self.levels
+            .iter()
+            .chain(&self.max_levels)
+            .map(|l| l.data.len() * 2)
+            .sum()
+    }
+
+    /// The least L with `span / 2^L ≤ 2` (capped at the coarsest level `top`).
+    fn level_for(&self, r: Aabb2, top: usize) -> usize {
+        let span = r.size().max_element() / self.levels[0].pixel_m;
+        let mut level = 0;
+        let mut reach = 2.0;
+        while span > reach && level < top {
+            level += 1;
+            reach *= 2.0;
+        }
+        level
     }
 
     /// A lower bound of the values of every base pixel meeting `r`, from the finest
     /// level where `r` spans at most about two texels per axis.
     pub fn min_over(&self, r: Aabb2) -> u16 {
-        let span = r.size().max_element() / self.levels[0].pixel_m;
-        // The least L with span / 2^L ≤ 2.
-        let mut level = 0;
-        let mut reach = 2.0;
-        while span > reach && level + 1 < self.levels.len() {
-            level += 1;
-            reach *= 2.0;
-        }
+        let level = self.level_for(r, self.levels.len() - 1);
         self.levels[level].min_over(r)
+    }
+
+    /// An upper bound of the values of every base pixel meeting `r` (closed, widened
+    /// by a hair), hence of `min_over(s)` for every rectangle `s ⊂ r`: each texel read
+    /// by `min_over(s)` holds the least value of its block, which contains a base
+    /// pixel meeting `s`. Pixels outside the raster are 0.
+    pub fn max_over(&self, r: Aabb2) -> u16 {
+        let level = self.level_for(r, self.max_levels.len());
+        let g = if level == 0 {
+            &self.levels[0]
+        } else {
+            &self.max_levels[level - 1]
+        };
+        let (i0, i1) = g.range(0, r.min.x, r.max.x);
+        let (j0, j1) = g.range(1, r.min.y, r.max.y);
+        let (i0, i1) = (i0.max(0), i1.min(g.nx - 1));
+        let (j0, j1) = (j0.max(0), j1.min(g.ny - 1));
+        let mut m = 0;
+        for j in j0..=j1 {
+            if i0 > i1 {
+                break;
+            }
+            let row = &g.data[(j * g.nx) as usize..((j + 1) * g.nx) as usize];
+            for &v in &row[i0 as usize..=i1 as usize] {
+                m = m.max(v);
+            }
+        }
+        m
     }
 }
 

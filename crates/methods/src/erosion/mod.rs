@@ -28,7 +28,8 @@
 //! the whole cell, so a 25 m cell in a city of 15 m deep building rows sees through
 //! everything. The PVS of a cell is the union of the PVS of its parts, and what is
 //! hidden from a cell is hidden from its parts: `refine` tests the cell, then its
-//! quarters for what it may see, down to [`MAX_DEPTH`] levels (≥ [`MIN_SUBCELL_M`]).
+//! quarters for what it may see, down to [`MAX_DEPTH`] levels (≥ [`MIN_SUBCELL_M`];
+//! [`RAYS_MAX_DEPTH`] for `erosion-rays`).
 //!
 //! Vertical erosion (§3.4): the occluders united with the ground form a height field
 //! whose columns extend to −∞, so eroding by the cell's height segment only moves
@@ -58,10 +59,17 @@ use std::sync::{Arc, Mutex};
 
 /// Cells are refined into quarters at most this many times (see `refine`).
 pub const MAX_DEPTH: usize = 3;
+/// `erosion-rays` goes one level deeper ([`RAYS_MIN_SUBCELL_M`]): its erosion by the
+/// whole (sub-)cell empties rows of terraced houses thinner than a 3 m quarter, which
+/// the segment erosion of `erosion` keeps (Den Haag). The level is adaptive as every
+/// level: only quarters with free space, for the objects their parent may still see.
+pub const RAYS_MAX_DEPTH: usize = 4;
 /// The first pass of each test uses this many times fewer azimuth bins.
 const COARSE_FACTOR: usize = 8;
 /// Sub-cells are not made smaller than this (m).
 pub const MIN_SUBCELL_M: f64 = 2.0;
+/// The same for `erosion-rays` (a 25 m cell reaches 1.6 m quarters at its 4th level).
+pub const RAYS_MIN_SUBCELL_M: f64 = 1.5;
 /// Memory bound of the cache of eroded occluder rasters (bytes).
 const CACHE_BYTES: usize = 3 << 29;
 
@@ -124,6 +132,16 @@ pub struct ErosionMethod {
 type CacheKey = (i64, i64, Element, u16);
 /// Eroded occluder pyramids with the tick of their last use.
 type ErodedCache = HashMap<CacheKey, (Arc<MinPyramid>, u64)>;
+
+/// X-samplings of one (sub-)cell per (object, top face) (None: keep the object).
+type SampleMemo = HashMap<(usize, usize), Option<Vec<DVec2>>>;
+
+/// What one pass of [`ErosionMethod::decide`] shares with the others: the maps of the
+/// coarser pass (seeds of the new maps) and the X-samplings.
+struct Pass<'a> {
+    seeds: Option<&'a HashMap<Element, PolarMap>>,
+    memo: &'a mut SampleMemo,
+}
 
 /// One visibility test of an occludee piece.
 struct Test {
@@ -199,11 +217,7 @@ impl ErosionMethod {
         let mut c = self.cache.lock().unwrap_or_else(|e| e.into_inner());
         let tick = c.0;
         c.1.insert(key, (g.clone(), tick));
-        let bytes = |m: &ErodedCache| -> usize {
-            m.values()
-                .flat_map(|(g, _)| g.levels.iter().map(|l| l.data.len() * 2))
-                .sum()
-        };
+        let bytes = |m: &ErodedCache| -> usize { m.values().map(|(g, _)| g.bytes()).sum() };
         while c.1.len() > 1 && bytes(&c.1) > CACHE_BYTES {
             let oldest = c.1.iter().min_by_key(|(_, v)| v.1).map(|(k, _)| *k);
             if let Some(k) = oldest {
@@ -214,18 +228,30 @@ impl ErosionMethod {
     }
 
     /// The tests of one object (None: visible without testing).
-    fn tests(&self, id: usize, cell: &ViewCell, ctx: &CellCtx) -> Option<Vec<Test>> {
+    ///
+    /// `memo` keeps the X-samplings of `erosion-rays` per (object, top face) for the
+    /// passes of one (sub-)cell: they depend on the cell, not on the number of bins.
+    fn tests(
+        &self,
+        id: usize,
+        cell: &ViewCell,
+        ctx: &CellCtx,
+        memo: &mut SampleMemo,
+    ) -> Option<Vec<Test>> {
         let obj = &self.scene.objects[id];
         if obj.bounds.intersects(&cell.aabb()) {
             return None;
         }
         let mut tests = Vec::new();
-        for top in &self.tops[id] {
+        for (k, top) in self.tops[id].iter().enumerate() {
             match self.variant {
                 Variant::Rays => {
                     // Theorem 2: the samples are a valid shrunk occludee for X = the
                     // cell, so the test runs on the map of `Element::Cell`.
-                    let samples = rays::x_sampling(&top.ring, ctx.half, ctx.s)?;
+                    let samples = memo
+                        .entry((id, k))
+                        .or_insert_with(|| rays::x_sampling(&top.ring, ctx.half, ctx.s))
+                        .as_ref()?;
                     let parts: Vec<(Vec<DVec2>, bool)> =
                         samples.iter().map(|&p| (vec![p - ctx.s], false)).collect();
                     tests.push(Test {
@@ -337,7 +363,12 @@ impl ErosionMethod {
         let mut visible = Vec::new();
         self.decide(cell, rect, &mut undecided, &mut visible);
         let size = rect.size();
-        if depth >= MAX_DEPTH || size.max_element() < 2.0 * MIN_SUBCELL_M || visible.is_empty() {
+        let (max_depth, min_m) = if self.variant == Variant::Rays {
+            (RAYS_MAX_DEPTH, RAYS_MIN_SUBCELL_M)
+        } else {
+            (MAX_DEPTH, MIN_SUBCELL_M)
+        };
+        if depth >= max_depth || size.max_element() < 2.0 * min_m || visible.is_empty() {
             for i in visible {
                 found[i as usize] = true;
             }
@@ -376,20 +407,41 @@ impl ErosionMethod {
         visible: &mut Vec<u32>,
     ) {
         let coarse = self.bins / COARSE_FACTOR;
+        let mut memo = SampleMemo::new();
         if coarse < 64 {
-            self.decide_at(self.bins, cell, rect, undecided, visible);
+            let pass = Pass {
+                seeds: None,
+                memo: &mut memo,
+            };
+            self.decide_at(self.bins, cell, rect, undecided, visible, pass);
             return;
         }
         let mut maybe = Vec::new();
-        self.decide_at(coarse, cell, rect, undecided, &mut maybe);
+        let pass = Pass {
+            seeds: None,
+            memo: &mut memo,
+        };
+        let coarse_maps = self.decide_at(coarse, cell, rect, undecided, &mut maybe, pass);
         let mut hidden = std::mem::take(undecided);
-        self.decide_at(self.bins, cell, rect, &mut maybe, visible);
+        self.decide_at(
+            self.bins,
+            cell,
+            rect,
+            &mut maybe,
+            visible,
+            Pass {
+                seeds: Some(&coarse_maps),
+                memo: &mut memo,
+            },
+        );
         hidden.append(&mut maybe);
         hidden.sort_unstable();
         *undecided = hidden;
     }
 
-    /// [`Self::decide`] with `bins` azimuth bins.
+    /// [`Self::decide`] with `bins` azimuth bins; the maps of a pass with fewer bins
+    /// from the same eye, if given, seed the new maps with their blockers
+    /// ([`PolarMap::seeded`]). Returns the maps built.
     fn decide_at(
         &self,
         bins: usize,
@@ -397,7 +449,9 @@ impl ErosionMethod {
         rect: Aabb2,
         undecided: &mut Vec<u32>,
         visible: &mut Vec<u32>,
-    ) {
+        pass: Pass<'_>,
+    ) -> HashMap<Element, PolarMap> {
+        let Pass { seeds, memo } = pass;
         let ctx = CellCtx {
             rect,
             half: rect.size() * 0.5,
@@ -410,7 +464,7 @@ impl ErosionMethod {
         };
         let mut pending: Vec<(u32, Vec<Test>)> = Vec::new();
         for &id in undecided.iter() {
-            match self.tests(id as usize, cell, &ctx) {
+            match self.tests(id as usize, cell, &ctx, memo) {
                 None => visible.push(id),
                 Some(t) => pending.push((id, t)),
             }
@@ -420,7 +474,10 @@ impl ErosionMethod {
         for (_, tests) in &pending {
             for t in tests {
                 maps.entry(t.element)
-                    .or_insert_with(|| PolarMap::new(ctx.bins.clone()))
+                    .or_insert_with(|| match seeds.and_then(|s| s.get(&t.element)) {
+                        Some(coarse) => PolarMap::seeded(ctx.bins.clone(), coarse),
+                        None => PolarMap::new(ctx.bins.clone()),
+                    })
                     .need(&t.target, t.eye, t.t);
             }
         }
@@ -443,6 +500,7 @@ impl ErosionMethod {
                 visible.push(id);
             }
         }
+        maps
     }
 
     /// Build the occlusion map of `element` from the cell centre.

@@ -239,6 +239,22 @@ impl PolarMap {
         }
     }
 
+    /// A map whose bins start with the blockers of `coarse`, a map of the same
+    /// occluders from the same eye with `factor` times fewer bins: a coarse blocker's
+    /// sector spans its whole wedge, hence the wedge of each of the `factor` bins
+    /// nested in it, so it is a valid blocker there. The march of the finer map then
+    /// only looks for closer or higher blockers than those.
+    pub fn seeded(bins: Bins, coarse: &PolarMap) -> Self {
+        let mut m = PolarMap::new(bins);
+        if coarse.bins.n > 0 && m.bins.n.is_multiple_of(coarse.bins.n) {
+            let factor = m.bins.n / coarse.bins.n;
+            for (b, st) in m.stairs.iter_mut().enumerate() {
+                st.clone_from(&coarse.stairs[b / factor]);
+            }
+        }
+        m
+    }
+
     /// Fill the needed bins from an eroded occluder raster (decimetres) seen from
     /// `eye` (horizontal position): each bin's wedge is cut radially into annular
     /// sectors about a pixel long; a sector becomes a blocker at its near radius with
@@ -247,7 +263,105 @@ impl PolarMap {
     /// it lower is blocked. A bin stops at its farthest target, or once a blocker hides
     /// the highest target from the highest eye tested there at any distance beyond (an
     /// early stop only costs tightness: fewer blockers never hide more).
+    ///
+    /// A sector gives a blocker only if it stands higher than every eye tested in the
+    /// bin and than the blockers already found no farther. So a run of consecutive
+    /// sectors is skipped at once when an *upper* bound of the raster over the run's
+    /// bounding box ([`MinPyramid::max_over`]) is no higher: no sector of the run could
+    /// have given a blocker. Runs double while they succeed, halve at each failure and
+    /// restart at one sector after a new blocker; the sectors are those of the one-by-one march, and the early
+    /// stop is checked at the end of a skipped run (its condition only grows with the
+    /// radius and no blocker was added inside), so the blockers are exactly those of the
+    /// one-by-one march (`march_one_by_one`, kept for the tests).
     pub fn march(&mut self, grid: &MinPyramid, eye: DVec2) {
+        let radii = self.radii(grid);
+        let w = self.bins.width;
+        let bulge_k = 1.0 - w.cos();
+        let sector_box = |da: DVec2, db: DVec2, r: f64, r1: f64| {
+            let bulge = r1 * bulge_k + 1e-9;
+            let pts = [da * r, db * r, da * r1, db * r1];
+            let mut bb = Aabb2::from_points(&pts).expand(bulge);
+            bb.min += eye;
+            bb.max += eye;
+            bb
+        };
+        for bin in 0..self.bins.n {
+            let reach = self.reach[bin];
+            if reach < 0.0 {
+                continue;
+            }
+            // Sectors 0..n_sec are those with a near radius below the reach.
+            let n_sec = radii.partition_point(|&r| r < reach);
+            let (top, e_lo, e) = (self.top[bin], self.eye_lo[bin], self.eye_hi[bin]);
+            let (da, db) = (self.bins.dirs[bin], self.bins.dirs[bin + 1]);
+            let stairs = &mut self.stairs[bin];
+            let mut run = 1usize;
+            let mut k = 0usize;
+            while k < n_sec {
+                let r = radii[k];
+                // The blocker a new one must beat: the highest no farther than it.
+                let best = best_at(stairs, r + EPS_M);
+                let floor_h = best.map_or(e_lo, |(_, hb)| hb.max(e_lo));
+                let stop =
+                    |r1: f64| best.is_some_and(|(ra, h)| h > e && (top - e) * ra < (h - e) * r1);
+                if run >= 2 {
+                    let end = (k + run).min(n_sec);
+                    if end - k >= 2 {
+                        let r_end = radii[end];
+                        let hmax = grid.max_over(sector_box(da, db, r, r_end)) as f64 * DM;
+                        if hmax <= floor_h {
+                            if stop(r_end) {
+                                break;
+                            }
+                            k = end;
+                            run = (run * 2).min(1 << 12);
+                            continue;
+                        }
+                        // Shorter runs from here on (halved at each failure).
+                        run /= 2;
+                    }
+                }
+                // One sector, as the one-by-one march.
+                let r1 = radii[k + 1];
+                let h = grid.min_over(sector_box(da, db, r, r1)) as f64 * DM;
+                let mut best = best;
+                if h > e_lo && best.is_none_or(|(_, hb)| h > hb) {
+                    insert_blocker(stairs, r + EPS_M, h);
+                    best = Some((r + EPS_M, h));
+                    run = 1;
+                } else {
+                    run = run.max(2);
+                }
+                if let Some((ra, h)) = best {
+                    if h > e && (top - e) * ra < (h - e) * r1 {
+                        break;
+                    }
+                }
+                k += 1;
+            }
+        }
+    }
+
+    /// The near radii of the march's sectors (sector `k` is `[radii[k], radii[k+1]]`),
+    /// up to the farthest reach: half a pixel near the eye, so that a wall two pixels
+    /// thick holds a whole sector; about square sectors farther out.
+    fn radii(&self, grid: &MinPyramid) -> Vec<f64> {
+        let d = grid.levels[0].pixel_m;
+        let w = self.bins.width;
+        let far = self.reach.iter().copied().fold(-1.0f64, f64::max);
+        let mut radii = vec![0.0f64];
+        let mut r = 0.0f64;
+        while r < far {
+            r += (0.5 * d).max(r * w);
+            radii.push(r);
+        }
+        radii.push(r + (0.5 * d).max(r * w));
+        radii
+    }
+
+    /// The march one sector at a time (the reference of `march`).
+    #[cfg(test)]
+    fn march_one_by_one(&mut self, grid: &MinPyramid, eye: DVec2) {
         let d = grid.levels[0].pixel_m;
         let w = self.bins.width;
         let bulge_k = 1.0 - w.cos();
@@ -259,24 +373,20 @@ impl PolarMap {
             let (top, e_lo, e) = (self.top[bin], self.eye_lo[bin], self.eye_hi[bin]);
             let (da, db) = (self.bins.dirs[bin], self.bins.dirs[bin + 1]);
             let stairs = &mut self.stairs[bin];
-            let mut best = stairs.last().copied();
             let mut r = 0.0f64;
             while r < reach {
-                // Half a pixel near the eye, so that a wall two pixels thick holds a
-                // whole sector; about square sectors farther out.
                 let r1 = r + (0.5 * d).max(r * w);
-                // Bounding box of the annular sector, grown by the arc's bulge.
                 let bulge = r1 * bulge_k + 1e-9;
                 let pts = [da * r, db * r, da * r1, db * r1];
                 let mut bb = Aabb2::from_points(&pts).expand(bulge);
                 bb.min += eye;
                 bb.max += eye;
                 let h = grid.min_over(bb) as f64 * DM;
+                let best = best_at(stairs, r + EPS_M);
                 if h > e_lo && best.is_none_or(|(_, hb)| h > hb) {
                     insert_blocker(stairs, r + EPS_M, h);
-                    best = Some((r + EPS_M, h));
                 }
-                if let Some((ra, h)) = best {
+                if let Some((ra, h)) = best_at(stairs, r + EPS_M) {
                     if h > e && (top - e) * ra < (h - e) * r1 {
                         break;
                     }
@@ -312,6 +422,13 @@ fn bin_hidden(stairs: &[(f64, f64)], rho: f64, e: f64, t: f64) -> bool {
         }
     }
     false
+}
+
+/// The highest blocker at a radius no greater than `r` (the staircase's `h` grows with
+/// its radius: the last such one).
+fn best_at(stairs: &[(f64, f64)], r: f64) -> Option<(f64, f64)> {
+    let n = stairs.partition_point(|&(ra, _)| ra <= r);
+    n.checked_sub(1).map(|i| stairs[i])
 }
 
 fn insert_blocker(stairs: &mut Vec<(f64, f64)>, ra: f64, h: f64) {
@@ -404,5 +521,128 @@ mod tests {
         assert!(t.at_eye);
         let m = map_with(&[(-1.0, -1.0, 1.0, 1.0, 10.0)], &t, bins);
         assert!(!m.hidden(&t, 2.0, 0.0));
+    }
+
+    /// A random city-like raster around the eye: blocks of random heights, some
+    /// touching, with streets between (deterministic xorshift).
+    fn random_grid(seed: u64, pixel_m: f64) -> Grid {
+        let mut x = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        let n = (100.0 / pixel_m) as i64;
+        let mut g = Grid::zeros(DVec2::splat(-50.0), pixel_m, n, n);
+        for _ in 0..40 {
+            let (i0, j0) = ((next() % n as u64) as i64, (next() % n as u64) as i64);
+            let (w, h) = (1 + (next() % 30) as i64, 1 + (next() % 30) as i64);
+            let z = (next() % 400) as u16;
+            for j in j0..(j0 + h).min(n) {
+                for i in i0..(i0 + w).min(n) {
+                    // Keep the eye's pixels free.
+                    if (i - n / 2).abs() > 2 || (j - n / 2).abs() > 2 {
+                        g.data[(j * n + i) as usize] = z;
+                    }
+                }
+            }
+        }
+        g
+    }
+
+    /// A map needing every bin up to 60 m, with eyes 1.5..2.5 m and targets up to 30 m.
+    fn needy(bins: Bins) -> PolarMap {
+        let mut m = PolarMap::new(bins);
+        for b in 0..m.bins.n {
+            m.reach[b] = 60.0;
+            m.top[b] = 30.0;
+            m.eye_lo[b] = 1.5;
+            m.eye_hi[b] = 2.5;
+        }
+        m
+    }
+
+    #[test]
+    fn max_over_bounds_every_min_inside() {
+        for seed in 1..6u64 {
+            let p = MinPyramid::new(random_grid(seed, 0.5));
+            let mut x = seed;
+            for k in 0..500 {
+                x = x
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                let c = DVec2::new(
+                    ((x >> 33) % 90) as f64 - 45.0,
+                    ((x >> 13) % 90) as f64 - 45.0,
+                ) + DVec2::splat(0.13 * (k % 7) as f64);
+                let big = Aabb2::new(
+                    c,
+                    c + DVec2::new(1.0 + (k % 23) as f64, 0.7 + (k % 17) as f64),
+                );
+                let hmax = p.max_over(big);
+                for f in [0.0, 0.25, 0.5, 0.9] {
+                    let lo = big.min + big.size() * f;
+                    let small = Aabb2::new(lo, lo + (big.max - lo) * 0.3);
+                    assert!(p.min_over(small) <= hmax, "{small:?} in {big:?}");
+                }
+                assert!(p.min_over(big) <= hmax);
+            }
+        }
+    }
+
+    /// The skipping march finds exactly the blockers of the one-by-one march, at a
+    /// coarse and a fine number of bins and two pixel sizes.
+    #[test]
+    fn skipping_march_equals_one_by_one() {
+        for seed in 1..9u64 {
+            for (n, px) in [(64, 0.5), (512, 0.5), (2048, 0.25)] {
+                let p = MinPyramid::new(random_grid(seed, px));
+                let eye = DVec2::new(0.1 * seed as f64, -0.07 * seed as f64);
+                let mut fast = needy(Bins::new(n));
+                let mut slow = fast.clone();
+                fast.march(&p, eye);
+                slow.march_one_by_one(&p, eye);
+                assert_eq!(fast.stairs, slow.stairs, "seed {seed}, {n} bins");
+                assert!(fast.stairs.iter().any(|s| !s.is_empty()));
+            }
+        }
+    }
+
+    /// A map seeded with the blockers of a coarser map hides every target the unseeded
+    /// map hides (its soundness against the ground truth is the methods' tests').
+    #[test]
+    fn seeded_map_hides_at_least_the_unseeded() {
+        for seed in 1..7u64 {
+            let p = MinPyramid::new(random_grid(seed, 0.5));
+            let mut coarse = needy(Bins::new(256));
+            coarse.march(&p, DVec2::ZERO);
+            let mut plain = needy(Bins::new(2048));
+            let mut seeded = PolarMap::seeded(Bins::new(2048), &coarse);
+            for b in 0..2048 {
+                seeded.reach[b] = 60.0;
+                seeded.top[b] = 30.0;
+                seeded.eye_lo[b] = 1.5;
+                seeded.eye_hi[b] = 2.5;
+            }
+            plain.march(&p, DVec2::ZERO);
+            seeded.march(&p, DVec2::ZERO);
+            let bins = Bins::new(2048);
+            let mut hidden = 0;
+            for k in 0..400 {
+                let a = k as f64 * 0.0157;
+                let c = DVec2::from_angle(a) * (8.0 + (k % 50) as f64);
+                let t = target(&bins, rect(c.x, c.y, c.x + 0.8, c.y + 0.6));
+                for z in [0.0, 6.0, 15.0, 28.0] {
+                    let by_plain = plain.hidden(&t, 2.0, z);
+                    let by_seeded = seeded.hidden(&t, 2.0, z);
+                    assert!(!by_plain || by_seeded, "seed {seed} target {k} z {z}");
+                    if by_seeded {
+                        hidden += 1;
+                    }
+                }
+            }
+            assert!(hidden > 0);
+        }
     }
 }
