@@ -29,8 +29,16 @@
 //! varies fastest).
 //! Occludees behind a plane are hidden when their Projection (supporting lines,
 //! §3.1) covers only black pixels: black pixels have depth ≤ 0 by construction.
+//! Occludees between the cell and a plane use the improved Projection of §4 against
+//! the plane's *depth* map: a black pixel keeps the depth of what blackened it — an
+//! occluder's Projection its farthest depth, a re-projected pixel the previous
+//! plane's (the equivalent occluder is planar, Property 1 holds behind it), a slice
+//! or the ground 0 (no use for an occludee in front of the plane) — and the occludee
+//! must lie behind all of them.
 
-use super::depth_map::{pixel_range, CoverageBuilder, OcclusionMap};
+use super::depth_map::{
+    depth_down, depth_up, pixel_range, CoverageBuilder, DepthMap, OcclusionMap,
+};
 use super::planes::{Direction, LocalBox, Plane};
 use super::projection::{extended_projection, FACE_CLEARANCE_M};
 use super::{occludee::occludee_projection, ExtProj};
@@ -44,6 +52,9 @@ pub struct SweepPlane {
     pub plane: Plane,
     pub cell: LocalBox,
     pub umbra: OcclusionMap,
+    /// Per black pixel, the extended depth of what makes it black (+∞ elsewhere),
+    /// with its max pyramid, for the improved Projection of occludees in front.
+    pub depth: DepthMap,
 }
 
 /// The sweep planes of all six directions of one cell.
@@ -66,18 +77,31 @@ impl Sweep {
         Sweep { planes: vec![] }
     }
 
-    /// Whether an occludee box is hidden on some sweep plane it lies behind.
-    pub fn hides(&self, b: &Aabb3) -> bool {
+    /// Whether an occludee box is hidden on some sweep plane: behind the plane with
+    /// its Projection (supporting lines) on black pixels, or — with `improved` —
+    /// between the cell and the plane with its improved Projection (§4) on black
+    /// pixels whose depth is below its own.
+    pub fn hides(&self, b: &Aabb3, improved: bool) -> bool {
         self.planes.iter().any(|sp| {
             let occ = sp.plane.dir.box_to_local(b.min, b.max);
-            if occ.min.x <= sp.plane.x {
+            let in_front = occ.max.x <= sp.plane.x;
+            if !(occ.min.x > sp.plane.x || (improved && in_front)) {
                 return false;
             }
-            let Some((rect, _)) = occludee_projection(&sp.cell, &occ, sp.plane.x, false) else {
+            let Some((rect, depth)) = occludee_projection(&sp.cell, &occ, sp.plane.x, improved)
+            else {
                 return false;
             };
             let (lo, hi) = (sp.plane.to_px(rect.min), sp.plane.to_px(rect.max));
-            pixel_range(lo, hi, sp.umbra.n).is_some_and(|r| sp.umbra.all_black(r))
+            let Some(r) = pixel_range(lo, hi, sp.umbra.n) else {
+                return false;
+            };
+            if occ.min.x > sp.plane.x {
+                sp.umbra.all_black(r)
+            } else {
+                sp.depth
+                    .all_below(r[0], r[1], r[2], r[3], depth_down(depth))
+            }
         })
     }
 
@@ -250,9 +274,9 @@ fn sweep_direction(
             // Every occluder in front of the plane is projected unless its Projection
             // is provably void (most leaves far in front of it).
             if o.far <= x && !void_projection(o, &lc, cell_size, x, ps) {
-                if let Some((poly, _)) = extended_projection(&o.vertices, &lc, x) {
+                if let Some((poly, d)) = extended_projection(&o.vertices, &lc, x) {
                     let px: Vec<DVec2> = poly.iter().map(|q| plane.to_px(*q)).collect();
-                    b.add_convex(&px, 0.0);
+                    b.add_convex(&px, depth_up(d).min(0.0));
                 }
             }
             if let Some(pi) = o.piece {
@@ -265,22 +289,39 @@ fn sweep_direction(
             }
         }
         let drawn = b.finish();
-        let mut black: Vec<bool> = match out.last() {
-            Some(prev) => reproject(&lc, &prev.plane, &prev.umbra, &plane),
-            None => vec![false; n * n],
+        let (mut black, prev_depth) = match out.last() {
+            Some(prev) => (
+                reproject(&lc, &prev.plane, &prev.umbra, &plane),
+                depth_up(prev.plane.x - x),
+            ),
+            None => (vec![false; n * n], 0.0),
         };
+        let mut depth: Vec<f32> = black
+            .iter()
+            .map(|&b| if b { prev_depth } else { f32::INFINITY })
+            .collect();
         for j in 0..n {
             for i in 0..n {
-                if drawn.at(i, j).is_finite() {
+                let d = drawn.at(i, j);
+                if d.is_finite() {
                     black[j * n + i] = true;
+                    depth[j * n + i] = depth[j * n + i].min(d);
                 }
             }
         }
-        ground_black(&plane, &mut black);
+        let mut ground = vec![false; n * n];
+        ground_black(&plane, &mut ground);
+        for (k, g) in ground.iter().enumerate() {
+            if *g {
+                black[k] = true;
+                depth[k] = depth[k].min(0.0);
+            }
+        }
         out.push(SweepPlane {
             plane,
             cell: lc,
             umbra: OcclusionMap::new(n, black),
+            depth: DepthMap::new(n, depth),
         });
     }
     out.retain(|p| p.umbra.count() > 0);
