@@ -69,6 +69,10 @@ pub struct Params {
     /// cell the requested planes would all fall within centimetres of it, where
     /// nothing can be hidden yet (occluders there Project to almost nothing).
     pub sweep_start_m: f64,
+    /// The sweep planes reach at least this far beyond the cell's far face (m): with
+    /// too few planes for the §5.2 spacing of `kernel_px` to get there, the kernel is
+    /// enlarged until they do ([`sweep::plane_positions`]).
+    pub sweep_reach_m: f64,
     /// Solid-angle threshold (sr) of occluder relevance (§6.1).
     pub solid_angle: f64,
     /// At most this many occluder pieces per direction (largest solid angle first).
@@ -97,6 +101,7 @@ impl Default for Params {
             sweep_planes: 15,
             kernel_px: 5,
             sweep_start_m: 2.0,
+            sweep_reach_m: 20.0,
             solid_angle: 0.002,
             max_occluders: 3000,
             plane_candidates: 12,
@@ -547,6 +552,7 @@ impl VisibilityMethod for ExtProj {
             v.push(("planes".to_string(), p.sweep_planes.to_string()));
             v.push(("kernel".to_string(), p.kernel_px.to_string()));
             v.push(("sweep_start".to_string(), p.sweep_start_m.to_string()));
+            v.push(("sweep_reach".to_string(), p.sweep_reach_m.to_string()));
         }
         if let Some(b) = p.adaptive_budget {
             v.push(("adaptive_budget".to_string(), b.to_string()));

@@ -26,7 +26,10 @@
 //! `P` the plane's size, `N` the resolution, `K = 5` the kernel in pixels) from
 //! `sweep_start_m` beyond the cell (or just behind the nearest occluder); the sweep
 //! stops after the requested number of planes (denser near the cell, where occlusion
-//! varies fastest).
+//! varies fastest). When the requested planes would stop short of `sweep_reach_m`
+//! the kernel `K` is enlarged until they reach it ([`plane_positions`]): leaves fuse
+//! only on planes near them, and with `K = 5` a few planes all crowd near the first.
+//! Leaves outside a direction's extended frustum are left to the other directions.
 //! Occludees behind a plane are hidden when their Projection (supporting lines,
 //! §3.1) covers only black pixels: black pixels have depth ≤ 0 by construction.
 //! Occludees between the cell and a plane use the improved Projection of §4 against
@@ -122,14 +125,21 @@ impl Sweep {
     }
 }
 
-/// Depths (local `w`) of at most `k` sweep planes from `x0`, spaced as in §5.2, not
-/// beyond `x1`.
-pub fn plane_positions(ext: &ExtProj, lc: &LocalBox, x0: f64, x1: f64, k: usize) -> Vec<f64> {
+/// Depths (local `w`) of at most `k` sweep planes from `x0`, spaced as in §5.2 with
+/// kernel `kernel` (pixels), not beyond `x1`.
+pub fn spaced_positions(
+    ext: &ExtProj,
+    lc: &LocalBox,
+    x0: f64,
+    x1: f64,
+    k: usize,
+    kernel: usize,
+) -> Vec<f64> {
     if k == 0 || !(x1 > x0) {
         return vec![];
     }
     let n = ext.params.resolution_px as f64;
-    let kk = ext.params.kernel_px.max(2) as f64;
+    let kk = kernel.max(2) as f64;
     // The kernel of [`reproject`] is the inverse image of the cell's own faces: its
     // size on the plane is about C·ΔD/D with C the cell's cross-section.
     let c = (lc.max.y - lc.min.y).max(lc.max.z - lc.min.z).max(1e-3);
@@ -151,6 +161,29 @@ pub fn plane_positions(ext: &ExtProj, lc: &LocalBox, x0: f64, x1: f64, k: usize)
         v.push(next);
     }
     v
+}
+
+/// Largest kernel (pixels) [`plane_positions`] grows to.
+pub const MAX_KERNEL_PX: usize = 64;
+
+/// Depths of the `k` sweep planes of a direction: the §5.2 spacing with the kernel
+/// `K = kernel_px`, or — when those `k` planes would stop short of
+/// `sweep_reach_m` beyond the cell (and of `x1`) — with the smallest larger `K`
+/// whose planes reach it. The spacing grows as the square of the distance, so with
+/// `K = 5` a few planes all crowd within a metre or two of the first one (five
+/// planes from 2 m span 2–3.5 m for a 0.5 m cell at 512 px), where the leaves in
+/// front have barely begun to fuse, and wider cells (smaller steps) fare worse.
+pub fn plane_positions(ext: &ExtProj, lc: &LocalBox, x0: f64, x1: f64, k: usize) -> Vec<f64> {
+    let target = x1.min(lc.max.x + ext.params.sweep_reach_m);
+    let mut kernel = ext.params.kernel_px.max(2);
+    loop {
+        let v = spaced_positions(ext, lc, x0, x1, k, kernel);
+        let reached = v.last().is_none_or(|&l| l >= target) || v.len() < k;
+        if reached || kernel >= MAX_KERNEL_PX {
+            return v;
+        }
+        kernel += 1;
+    }
 }
 
 /// The equivalent planar cell of §5.1 on the cell's far-face plane `w = cw1`: every
@@ -250,7 +283,9 @@ fn sweep_direction(
     for &t in tri_ids {
         let tri = &ext.occluders.triangles[t as usize];
         let lb = dir.box_to_local(tri.bounds.min, tri.bounds.max);
-        if lb.max.x <= w_min {
+        // Leaves outside the direction's extended frustum project outside its planes
+        // (leaving an occluder out is always conservative).
+        if lb.max.x <= w_min || !super::in_frustum(&lc, &lb, ext.params.extension) {
             continue;
         }
         push(tri.occluder.local_vertices(dir, w_min), None);
@@ -370,6 +405,37 @@ fn void_projection(o: &LocalOccluder, lc: &LocalBox, cell: DVec2, x: f64, ps: DV
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Five planes of the K = 5 spacing from 2 m crowd within 2–3.5 m of a 0.5 m
+    /// cell; the kernel grows until they reach `sweep_reach_m`. Fifteen planes
+    /// already reach it with K = 5 and are left as they are.
+    #[test]
+    fn few_planes_reach_as_far_as_asked() {
+        use sightline_scene::{Object, Scene};
+        let scene = std::sync::Arc::new(Scene::from_objects(vec![Object::rect_block(
+            10.0, 10.0, 12.0, 12.0, 5.0,
+        )]));
+        let params = super::super::Params {
+            sweep: true,
+            resolution_px: 512,
+            ..super::super::Params::default()
+        };
+        let ext = ExtProj::new(scene, params);
+        let lc = Direction::PosX.box_to_local(DVec3::ZERO, DVec3::new(0.5, 0.5, 0.5));
+        let (x0, x1) = (lc.max.x + 2.0, lc.max.x + 300.0);
+        let paper = spaced_positions(&ext, &lc, x0, x1, 5, 5);
+        assert_eq!(paper.len(), 5);
+        assert!(paper[4] - lc.max.x < 4.0, "{paper:?}");
+        let ours = plane_positions(&ext, &lc, x0, x1, 5);
+        assert_eq!(ours.len(), 5);
+        assert!(ours[4] - lc.max.x >= ext.params.sweep_reach_m, "{ours:?}");
+        assert!(ours.windows(2).all(|w| w[1] > w[0]));
+        let fifteen = plane_positions(&ext, &lc, x0, x1, 15);
+        assert_eq!(fifteen, spaced_positions(&ext, &lc, x0, x1, 15, 5));
+        // Planes never go beyond the last occluder.
+        let short = plane_positions(&ext, &lc, x0, x0 + 5.0, 5);
+        assert!(short.iter().all(|&x| x <= x0 + 5.0) && !short.is_empty());
+    }
 
     #[test]
     fn equivalent_cell_contains_the_face_and_grows() {
