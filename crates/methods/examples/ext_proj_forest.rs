@@ -10,7 +10,9 @@
 //! ground truth's own hidden fraction (an upper bound of what any conservative method
 //! can cull).
 //!
-//! Environment: `RES=512` depth-map resolution; `CELL=x0,y0,z0,x1,y1,z1` one given cell; `SWEEP_DEBUG=DIR` writes the first
+//! Environment: `RES=512` depth-map resolution (the CLI's default with `--sweep`);
+//! `KERNEL`, `START`, `REACH` the sweep's kernel size (px), first-plane distance and
+//! least reach (m); `CELL=x0,y0,z0,x1,y1,z1` one given cell; `SWEEP_DEBUG=DIR` writes the first
 //! cell's sweep occlusion maps as PGM images to DIR; `LEAVES`, `LEAF=a:b`, `CROWN=a:b`,
 //! `ASPECT=a:b`, `TRUNK=a:b`, `LIFT` override the dense preset (for tuning).
 
@@ -117,6 +119,18 @@ fn main() {
             .and_then(|s| s.parse::<usize>().ok())
             .map(|r| r.next_power_of_two())
             .unwrap_or(Params::default().resolution_px),
+        kernel_px: std::env::var("KERNEL")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(Params::default().kernel_px),
+        sweep_start_m: std::env::var("START")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(Params::default().sweep_start_m),
+        sweep_reach_m: std::env::var("REACH")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(Params::default().sweep_reach_m),
         ..Params::default()
     };
     let mut variants: Vec<(String, Params)> = vec![("plain".into(), base.clone())];

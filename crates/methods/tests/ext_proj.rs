@@ -168,3 +168,39 @@ fn improved_projection_is_no_larger() {
         assert_conservative(&scene, &c, &imp);
     }
 }
+
+/// Fig. 7(a) of the paper: a small building just behind a wall slightly wider than
+/// it, a projection plane far behind both. The standard Projection of the building
+/// (separating lines) overflows the wall's Projection on that plane; the improved
+/// one (supporting lines, §4) lies inside it, and the building is hidden indeed.
+#[test]
+fn improved_projection_hides_an_occludee_in_front_of_the_plane() {
+    use sightline_methods::ext_proj::planes::{Direction, Plane};
+    use sightline_methods::ext_proj::PlaneMap;
+    let scene = Arc::new(Scene::from_objects(vec![
+        Object::rect_block(20.0, -3.0, 21.0, 3.0, 6.0), // 0 wall
+        Object::rect_block(21.5, -1.0, 22.5, 1.0, 3.0), // 1 just behind it
+    ]));
+    let c = cell("0,-2,1.5,4,2,2");
+    let ext = ExtProj::new(scene.clone(), Params::default());
+    let dir = Direction::PosX;
+    let lc = dir.box_to_local(c.min, c.max);
+    let pieces = ext.local_pieces(&c, dir, &ext.occluders.relevant(&c.aabb()));
+    let plane = Plane::new(dir, &lc, 40.0, 256, 1.5);
+    let map = ext.depth_map(&plane, &lc, &pieces);
+    let m = PlaneMap {
+        plane,
+        cell: lc,
+        map,
+    };
+    let b = scene.objects[1].bounds;
+    assert!(
+        !m.hides(&b, false),
+        "the standard Projection overflows the wall's"
+    );
+    assert!(m.hides(&b, true), "the improved Projection lies inside it");
+    assert!(m.hides_points(&b.corners(), true) && !m.hides_points(&b.corners(), false));
+    let p = pvs(&scene, &c, Params::default());
+    assert_eq!(p, vec![0]);
+    assert_conservative(&scene, &c, &p);
+}

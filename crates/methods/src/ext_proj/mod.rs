@@ -69,6 +69,10 @@ pub struct Params {
     /// cell the requested planes would all fall within centimetres of it, where
     /// nothing can be hidden yet (occluders there Project to almost nothing).
     pub sweep_start_m: f64,
+    /// The sweep planes reach at least this far beyond the cell's far face (m): with
+    /// too few planes for the §5.2 spacing of `kernel_px` to get there, the kernel is
+    /// enlarged until they do ([`sweep::plane_positions`]).
+    pub sweep_reach_m: f64,
     /// Solid-angle threshold (sr) of occluder relevance (§6.1).
     pub solid_angle: f64,
     /// At most this many occluder pieces per direction (largest solid angle first).
@@ -97,6 +101,7 @@ impl Default for Params {
             sweep_planes: 15,
             kernel_px: 5,
             sweep_start_m: 2.0,
+            sweep_reach_m: 20.0,
             solid_angle: 0.002,
             max_occluders: 3000,
             plane_candidates: 12,
@@ -198,28 +203,50 @@ impl PlaneMap {
     /// from the cell's corners — for a fixed viewpoint the view is a linear-fractional
     /// map, extreme at the hull's vertices; for a fixed point it is monotone in each
     /// coordinate of the viewpoint, extreme at the cell's corners. Tighter than the
-    /// box for a rotated building; its extended depth is its nearest vertex's.
-    pub fn hides_points(&self, points: &[DVec3]) -> bool {
+    /// box for a rotated building; its extended depth is its nearest vertex's. With
+    /// `improved`, a hull between the cell and the plane uses the improved Projection
+    /// of §4 on its vertices' 2D projections ([`occludee::improved_segment_points`]).
+    pub fn hides_points(&self, points: &[DVec3], improved: bool) -> bool {
         let x = self.plane.x;
-        let mut lo = DVec2::splat(f64::INFINITY);
-        let mut hi = DVec2::splat(f64::NEG_INFINITY);
+        if points.is_empty() {
+            return false;
+        }
+        let local: Vec<DVec3> = points.iter().map(|p| self.plane.dir.to_local(*p)).collect();
         let mut near = f64::INFINITY;
-        let corners = self.cell.corners();
-        for p in points {
-            let p = self.plane.dir.to_local(*p);
+        let mut far = f64::NEG_INFINITY;
+        for p in &local {
             if !(p.x > self.cell.max.x) {
                 return false;
             }
             near = near.min(p.x);
-            for e in &corners {
-                let q = planes::view(*e, p, x);
-                lo = lo.min(q);
-                hi = hi.max(q);
+            far = far.max(p.x);
+        }
+        let mut rect: Option<(DVec2, DVec2)> = None;
+        if improved && far <= x {
+            let cw = [self.cell.min.x, self.cell.max.x];
+            let wu: Vec<DVec2> = local.iter().map(|p| DVec2::new(p.x, p.y)).collect();
+            let wv: Vec<DVec2> = local.iter().map(|p| DVec2::new(p.x, p.z)).collect();
+            let su =
+                occludee::improved_segment_points(cw, [self.cell.min.y, self.cell.max.y], &wu, x);
+            let sv =
+                occludee::improved_segment_points(cw, [self.cell.min.z, self.cell.max.z], &wv, x);
+            if let (Some(su), Some(sv)) = (su, sv) {
+                rect = Some((DVec2::new(su[0], sv[0]), DVec2::new(su[1], sv[1])));
             }
         }
-        if points.is_empty() {
-            return false;
-        }
+        let (lo, hi) = rect.unwrap_or_else(|| {
+            let mut lo = DVec2::splat(f64::INFINITY);
+            let mut hi = DVec2::splat(f64::NEG_INFINITY);
+            let corners = self.cell.corners();
+            for p in &local {
+                for e in &corners {
+                    let q = planes::view(*e, *p, x);
+                    lo = lo.min(q);
+                    hi = hi.max(q);
+                }
+            }
+            (lo, hi)
+        });
         let (a, b) = (self.plane.to_px(lo), self.plane.to_px(hi));
         let Some(r) = pixel_range(a, b, self.map.n) else {
             return false;
@@ -489,14 +516,14 @@ impl ExtProj {
         } else {
             sweep::Sweep::empty()
         };
-        let extra = |b: &Aabb3| sweep.hides(b);
+        let extra = |b: &Aabb3| sweep.hides(b, self.params.improved);
         candidates
             .iter()
             .copied()
             .filter(|&id| {
                 let (boxes, hulls) = (&self.boxes[id as usize], &self.hulls[id as usize]);
                 !boxes.iter().zip(hulls).all(|(b, h)| {
-                    maps.iter().any(|m| m.hides_points(h))
+                    maps.iter().any(|m| m.hides_points(h, self.params.improved))
                         || self.box_hidden(b, &maps, &extra, self.params.occludee_splits)
                 })
             })
@@ -525,6 +552,7 @@ impl VisibilityMethod for ExtProj {
             v.push(("planes".to_string(), p.sweep_planes.to_string()));
             v.push(("kernel".to_string(), p.kernel_px.to_string()));
             v.push(("sweep_start".to_string(), p.sweep_start_m.to_string()));
+            v.push(("sweep_reach".to_string(), p.sweep_reach_m.to_string()));
         }
         if let Some(b) = p.adaptive_budget {
             v.push(("adaptive_budget".to_string(), b.to_string()));
@@ -603,7 +631,14 @@ mod tests {
             for o in &scene.objects {
                 let b = o.bounds;
                 let local = m.plane.dir.box_to_local(b.min, b.max);
-                assert_eq!(m.hides_points(&b.corners()), m.hides_local(&local, false));
+                assert_eq!(
+                    m.hides_points(&b.corners(), false),
+                    m.hides_local(&local, false)
+                );
+                assert_eq!(
+                    m.hides_points(&b.corners(), true),
+                    m.hides_local(&local, true)
+                );
                 agree += m.hides_local(&local, false) as usize;
             }
         }
@@ -630,7 +665,7 @@ mod tests {
         let c = ViewCell::new(DVec3::new(15.0, 20.0, 1.5), DVec3::new(25.0, 30.0, 2.0)).unwrap();
         let maps = ext.plane_maps_for(&c, &[0, 1]);
         let h = &ext.hulls[1][0];
-        assert!(maps.iter().any(|m| m.hides_points(h)));
+        assert!(maps.iter().any(|m| m.hides_points(h, false)));
         assert_eq!(ext.pvs_among(&c, &[0, 1]), vec![0]);
     }
 }

@@ -51,27 +51,19 @@ fn line_at(a: DVec2, b: DVec2, x: f64) -> f64 {
     a.y + (b.y - a.y) * (x - a.x) / (b.x - a.x)
 }
 
-/// The supporting line touching both rectangles from above (`sign = 1`) or below
-/// (`sign = -1`), evaluated at `w = x`. The tangent touches each rectangle at one of
-/// its two extreme corners on that side.
-fn supporting_line_at(
-    cw: [f64; 2],
-    cu_side: f64,
-    ow: [f64; 2],
-    ou_side: f64,
-    sign: f64,
-    x: f64,
-) -> Option<f64> {
-    let cells = [DVec2::new(cw[0], cu_side), DVec2::new(cw[1], cu_side)];
-    let occs = [DVec2::new(ow[0], ou_side), DVec2::new(ow[1], ou_side)];
-    let all = [cells[0], cells[1], occs[0], occs[1]];
+/// The supporting line touching the cell's rectangle and the occludee's points from
+/// above (`sign = 1`) or below (`sign = -1`), evaluated at `w = x`: both lie on the
+/// same side of it. `cells` are the cell's two corners on that side, `occs` the
+/// occludee's 2D points (`(w, u)`, all beyond the cell); the tangent touches the cell
+/// at one of those corners and the occludee at one of its points.
+fn supporting_line_at(cells: [DVec2; 2], occs: &[DVec2], sign: f64, x: f64) -> Option<f64> {
     let mut best: Option<f64> = None;
     for a in cells {
-        for b in occs {
+        for &b in occs {
             if b.x <= a.x {
                 continue;
             }
-            let ok = all.iter().all(|q| {
+            let ok = cells.iter().chain(occs).all(|q| {
                 let l = line_at(a, b, q.x);
                 sign * (l - q.y) >= -1e-9 * (1.0 + q.y.abs())
             });
@@ -95,6 +87,31 @@ fn supporting_line_at(
     best
 }
 
+/// §4.2 improved 2D Projection of an occludee given by its 2D points `(w, u)` (the
+/// projection of its vertices on the plane `(w, u)`), lying between the cell
+/// `[cw0,cw1]×[cu0,cu1]` and the plane `w = x`: the segment between the intersections
+/// of the lower and upper supporting lines with the plane, or their mid-point beyond
+/// the vanishing point. The 2D argument of §4.2 (the union of the triangles spanned
+/// by the cell and a point of the segment is the region between the supporting lines,
+/// which contains the occludee) holds for any occludee between those lines.
+pub fn improved_segment_points(
+    cw: [f64; 2],
+    cu: [f64; 2],
+    occ: &[DVec2],
+    x: f64,
+) -> Option<[f64; 2]> {
+    let top = [DVec2::new(cw[0], cu[1]), DVec2::new(cw[1], cu[1])];
+    let bottom = [DVec2::new(cw[0], cu[0]), DVec2::new(cw[1], cu[0])];
+    let hi = supporting_line_at(top, occ, 1.0, x)?;
+    let lo = supporting_line_at(bottom, occ, -1.0, x)?;
+    if lo <= hi {
+        Some([lo, hi])
+    } else {
+        let m = 0.5 * (lo + hi);
+        Some([m, m])
+    }
+}
+
 /// §4.2 improved 2D Projection of an occludee lying between the cell and the plane
 /// `w = x` (`ow1 ≤ x`): the segment between the intersections of the lower and
 /// upper supporting lines with the plane, or — beyond the vanishing point, when the
@@ -106,14 +123,13 @@ pub fn improved_segment(
     ou: [f64; 2],
     x: f64,
 ) -> Option<[f64; 2]> {
-    let hi = supporting_line_at(cw, cu[1], ow, ou[1], 1.0, x)?;
-    let lo = supporting_line_at(cw, cu[0], ow, ou[0], -1.0, x)?;
-    if lo <= hi {
-        Some([lo, hi])
-    } else {
-        let m = 0.5 * (lo + hi);
-        Some([m, m])
-    }
+    let occ = [
+        DVec2::new(ow[0], ou[0]),
+        DVec2::new(ow[1], ou[0]),
+        DVec2::new(ow[0], ou[1]),
+        DVec2::new(ow[1], ou[1]),
+    ];
+    improved_segment_points(cw, cu, &occ, x)
 }
 
 /// The occludee's Projection rectangle on the plane `w = x` and its extended depth
@@ -180,6 +196,30 @@ mod tests {
             (imp[0] - 0.0).abs() < 1e-9 && (imp[1] - 2.0).abs() < 1e-9,
             "{imp:?}"
         );
+    }
+
+    /// For the corners of a box the point version is the box version; for a diamond
+    /// inside the box it is no wider.
+    #[test]
+    fn improved_segment_of_points() {
+        let (cw, cu) = ([0.0, 2.0], [0.0, 2.0]);
+        let b = improved_segment(cw, cu, [10.0, 12.0], [-1.0, 3.0], 20.0).unwrap();
+        let corners = [
+            DVec2::new(10.0, -1.0),
+            DVec2::new(12.0, -1.0),
+            DVec2::new(10.0, 3.0),
+            DVec2::new(12.0, 3.0),
+        ];
+        assert_eq!(improved_segment_points(cw, cu, &corners, 20.0), Some(b));
+        let diamond = [
+            DVec2::new(10.0, 1.0),
+            DVec2::new(11.0, -1.0),
+            DVec2::new(12.0, 1.0),
+            DVec2::new(11.0, 3.0),
+        ];
+        let d = improved_segment_points(cw, cu, &diamond, 20.0).unwrap();
+        assert!(d[0] >= b[0] - 1e-12 && d[1] <= b[1] + 1e-12, "{d:?} {b:?}");
+        assert!(d[1] - d[0] < b[1] - b[0]);
     }
 
     #[test]

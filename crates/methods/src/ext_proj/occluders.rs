@@ -39,6 +39,11 @@ pub struct Piece {
     pub bounds: Aabb3,
     /// A rough largest cross-section (m²), for the solid-angle heuristic.
     pub area: f64,
+    /// The cross-section (m²) that decides the piece's relevance region: that of the
+    /// whole fused footprint it was cut from. The convex decomposition cuts a street
+    /// front into pieces, some of them thin slivers whose own solid angle is tiny;
+    /// leaving them out opens gaps in the fused front that hide nothing behind it.
+    pub relevance: f64,
 }
 
 type Entry = GeomWithData<Rectangle<[f64; 2]>, u32>;
@@ -67,16 +72,18 @@ impl OccluderSet {
                 if p.base <= GROUND_M {
                     ground.push((&p.footprint, p.top));
                 } else {
+                    let whole = cross_section(&p.footprint, p.top - p.base);
                     for (poly, _) in convex_pieces(&p.footprint) {
-                        push_prism(&mut pieces, poly, p.base, p.top);
+                        push_prism(&mut pieces, poly, p.base, p.top, whole);
                     }
                 }
             }
         }
         for (level, polys) in fused_levels(&ground) {
             for poly in polys {
+                let whole = cross_section(&poly, level);
                 for (piece, _) in convex_pieces(&poly) {
-                    push_prism(&mut pieces, piece, 0.0, level);
+                    push_prism(&mut pieces, piece, 0.0, level, whole);
                 }
             }
         }
@@ -96,6 +103,7 @@ impl OccluderSet {
                         occluder: ConvexOccluder::Planar(tri.to_vec()),
                         bounds: Aabb3::from_points(&tri),
                         area,
+                        relevance: area,
                     });
                 }
             }
@@ -135,16 +143,23 @@ impl OccluderSet {
     }
 }
 
-fn push_prism(pieces: &mut Vec<Piece>, footprint: Vec<DVec2>, base: f64, top: f64) {
+/// The rough largest cross-section (m²) of a prism of `height` over `footprint`.
+fn cross_section(footprint: &Polygon, height: f64) -> f64 {
+    (footprint.bbox().size().length() * height).max(footprint.area())
+}
+
+fn push_prism(pieces: &mut Vec<Piece>, footprint: Vec<DVec2>, base: f64, top: f64, whole: f64) {
     let area = polygon_area(&footprint);
     if footprint.len() < 3 || !(area > 0.0) {
         return;
     }
     let b = sightline_geom::Aabb2::from_points(&footprint);
     let diag = b.size().length();
+    let own = (diag * (top - base)).max(area);
     pieces.push(Piece {
         bounds: Aabb3::new(b.min.extend(base), b.max.extend(top)),
-        area: (diag * (top - base)).max(area),
+        area: own,
+        relevance: own.max(whole),
         occluder: ConvexOccluder::Prism {
             footprint,
             base,
@@ -158,7 +173,7 @@ fn relevance_tree(pieces: &[Piece], solid_angle: f64) -> RTree<Entry> {
         .iter()
         .enumerate()
         .map(|(i, p)| {
-            let r = (p.area / solid_angle.max(1e-9)).sqrt();
+            let r = (p.relevance / solid_angle.max(1e-9)).sqrt();
             GeomWithData::new(
                 Rectangle::from_corners(
                     [p.bounds.min.x - r, p.bounds.min.y - r],
@@ -396,6 +411,30 @@ mod tests {
         for (p, _) in &pieces {
             assert!(is_convex(p));
         }
+    }
+
+    /// A street front fused from a long bar and a thin wing: the wing's own piece has a
+    /// small cross-section, but it is relevant wherever the front is (a gap would open
+    /// in the fused front otherwise).
+    #[test]
+    fn pieces_are_relevant_where_their_whole_front_is() {
+        let bar = Object::rect_block(0.0, 0.0, 200.0, 10.0, 20.0);
+        let wing = Object::rect_block(100.0, 10.0, 101.0, 12.0, 20.0);
+        let scene = Scene::from_objects(vec![bar, wing]);
+        let set = OccluderSet::build(&scene, 0.002);
+        assert!(set.pieces.len() >= 2, "{}", set.pieces.len());
+        let small = set
+            .pieces
+            .iter()
+            .map(|p| p.area)
+            .fold(f64::INFINITY, f64::min);
+        let r_small = (small / 0.002).sqrt();
+        // A cell beyond the small piece's own radius, within the front's.
+        let y = 12.0 + r_small + 50.0;
+        let cell = Aabb3::new(DVec3::new(90.0, y, 1.5), DVec3::new(110.0, y + 20.0, 2.0));
+        let rel = set.relevant(&cell);
+        assert_eq!(rel.len(), set.pieces.len(), "{rel:?} radius {r_small}");
+        assert!(set.pieces.iter().all(|p| p.relevance >= p.area));
     }
 
     #[test]

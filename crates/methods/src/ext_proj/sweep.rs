@@ -26,11 +26,22 @@
 //! `P` the plane's size, `N` the resolution, `K = 5` the kernel in pixels) from
 //! `sweep_start_m` beyond the cell (or just behind the nearest occluder); the sweep
 //! stops after the requested number of planes (denser near the cell, where occlusion
-//! varies fastest).
+//! varies fastest). When the requested planes would stop short of `sweep_reach_m`
+//! the kernel `K` is enlarged until they reach it ([`plane_positions`]): leaves fuse
+//! only on planes near them, and with `K = 5` a few planes all crowd near the first.
+//! Leaves outside a direction's extended frustum are left to the other directions.
 //! Occludees behind a plane are hidden when their Projection (supporting lines,
 //! §3.1) covers only black pixels: black pixels have depth ≤ 0 by construction.
+//! Occludees between the cell and a plane use the improved Projection of §4 against
+//! the plane's *depth* map: a black pixel keeps the depth of what blackened it — an
+//! occluder's Projection its farthest depth, a re-projected pixel the previous
+//! plane's (the equivalent occluder is planar, Property 1 holds behind it), a slice
+//! or the ground 0 (no use for an occludee in front of the plane) — and the occludee
+//! must lie behind all of them.
 
-use super::depth_map::{pixel_range, CoverageBuilder, OcclusionMap};
+use super::depth_map::{
+    depth_down, depth_up, pixel_range, CoverageBuilder, DepthMap, OcclusionMap,
+};
 use super::planes::{Direction, LocalBox, Plane};
 use super::projection::{extended_projection, FACE_CLEARANCE_M};
 use super::{occludee::occludee_projection, ExtProj};
@@ -44,6 +55,9 @@ pub struct SweepPlane {
     pub plane: Plane,
     pub cell: LocalBox,
     pub umbra: OcclusionMap,
+    /// Per black pixel, the extended depth of what makes it black (+∞ elsewhere),
+    /// with its max pyramid, for the improved Projection of occludees in front.
+    pub depth: DepthMap,
 }
 
 /// The sweep planes of all six directions of one cell.
@@ -66,18 +80,31 @@ impl Sweep {
         Sweep { planes: vec![] }
     }
 
-    /// Whether an occludee box is hidden on some sweep plane it lies behind.
-    pub fn hides(&self, b: &Aabb3) -> bool {
+    /// Whether an occludee box is hidden on some sweep plane: behind the plane with
+    /// its Projection (supporting lines) on black pixels, or — with `improved` —
+    /// between the cell and the plane with its improved Projection (§4) on black
+    /// pixels whose depth is below its own.
+    pub fn hides(&self, b: &Aabb3, improved: bool) -> bool {
         self.planes.iter().any(|sp| {
             let occ = sp.plane.dir.box_to_local(b.min, b.max);
-            if occ.min.x <= sp.plane.x {
+            let in_front = occ.max.x <= sp.plane.x;
+            if !(occ.min.x > sp.plane.x || (improved && in_front)) {
                 return false;
             }
-            let Some((rect, _)) = occludee_projection(&sp.cell, &occ, sp.plane.x, false) else {
+            let Some((rect, depth)) = occludee_projection(&sp.cell, &occ, sp.plane.x, improved)
+            else {
                 return false;
             };
             let (lo, hi) = (sp.plane.to_px(rect.min), sp.plane.to_px(rect.max));
-            pixel_range(lo, hi, sp.umbra.n).is_some_and(|r| sp.umbra.all_black(r))
+            let Some(r) = pixel_range(lo, hi, sp.umbra.n) else {
+                return false;
+            };
+            if occ.min.x > sp.plane.x {
+                sp.umbra.all_black(r)
+            } else {
+                sp.depth
+                    .all_below(r[0], r[1], r[2], r[3], depth_down(depth))
+            }
         })
     }
 
@@ -98,14 +125,21 @@ impl Sweep {
     }
 }
 
-/// Depths (local `w`) of at most `k` sweep planes from `x0`, spaced as in §5.2, not
-/// beyond `x1`.
-pub fn plane_positions(ext: &ExtProj, lc: &LocalBox, x0: f64, x1: f64, k: usize) -> Vec<f64> {
+/// Depths (local `w`) of at most `k` sweep planes from `x0`, spaced as in §5.2 with
+/// kernel `kernel` (pixels), not beyond `x1`.
+pub fn spaced_positions(
+    ext: &ExtProj,
+    lc: &LocalBox,
+    x0: f64,
+    x1: f64,
+    k: usize,
+    kernel: usize,
+) -> Vec<f64> {
     if k == 0 || !(x1 > x0) {
         return vec![];
     }
     let n = ext.params.resolution_px as f64;
-    let kk = ext.params.kernel_px.max(2) as f64;
+    let kk = kernel.max(2) as f64;
     // The kernel of [`reproject`] is the inverse image of the cell's own faces: its
     // size on the plane is about C·ΔD/D with C the cell's cross-section.
     let c = (lc.max.y - lc.min.y).max(lc.max.z - lc.min.z).max(1e-3);
@@ -127,6 +161,29 @@ pub fn plane_positions(ext: &ExtProj, lc: &LocalBox, x0: f64, x1: f64, k: usize)
         v.push(next);
     }
     v
+}
+
+/// Largest kernel (pixels) [`plane_positions`] grows to.
+pub const MAX_KERNEL_PX: usize = 64;
+
+/// Depths of the `k` sweep planes of a direction: the §5.2 spacing with the kernel
+/// `K = kernel_px`, or — when those `k` planes would stop short of
+/// `sweep_reach_m` beyond the cell (and of `x1`) — with the smallest larger `K`
+/// whose planes reach it. The spacing grows as the square of the distance, so with
+/// `K = 5` a few planes all crowd within a metre or two of the first one (five
+/// planes from 2 m span 2–3.5 m for a 0.5 m cell at 512 px), where the leaves in
+/// front have barely begun to fuse, and wider cells (smaller steps) fare worse.
+pub fn plane_positions(ext: &ExtProj, lc: &LocalBox, x0: f64, x1: f64, k: usize) -> Vec<f64> {
+    let target = x1.min(lc.max.x + ext.params.sweep_reach_m);
+    let mut kernel = ext.params.kernel_px.max(2);
+    loop {
+        let v = spaced_positions(ext, lc, x0, x1, k, kernel);
+        let reached = v.last().is_none_or(|&l| l >= target) || v.len() < k;
+        if reached || kernel >= MAX_KERNEL_PX {
+            return v;
+        }
+        kernel += 1;
+    }
 }
 
 /// The equivalent planar cell of §5.1 on the cell's far-face plane `w = cw1`: every
@@ -226,7 +283,9 @@ fn sweep_direction(
     for &t in tri_ids {
         let tri = &ext.occluders.triangles[t as usize];
         let lb = dir.box_to_local(tri.bounds.min, tri.bounds.max);
-        if lb.max.x <= w_min {
+        // Leaves outside the direction's extended frustum project outside its planes
+        // (leaving an occluder out is always conservative).
+        if lb.max.x <= w_min || !super::in_frustum(&lc, &lb, ext.params.extension) {
             continue;
         }
         push(tri.occluder.local_vertices(dir, w_min), None);
@@ -250,9 +309,9 @@ fn sweep_direction(
             // Every occluder in front of the plane is projected unless its Projection
             // is provably void (most leaves far in front of it).
             if o.far <= x && !void_projection(o, &lc, cell_size, x, ps) {
-                if let Some((poly, _)) = extended_projection(&o.vertices, &lc, x) {
+                if let Some((poly, d)) = extended_projection(&o.vertices, &lc, x) {
                     let px: Vec<DVec2> = poly.iter().map(|q| plane.to_px(*q)).collect();
-                    b.add_convex(&px, 0.0);
+                    b.add_convex(&px, depth_up(d).min(0.0));
                 }
             }
             if let Some(pi) = o.piece {
@@ -265,22 +324,39 @@ fn sweep_direction(
             }
         }
         let drawn = b.finish();
-        let mut black: Vec<bool> = match out.last() {
-            Some(prev) => reproject(&lc, &prev.plane, &prev.umbra, &plane),
-            None => vec![false; n * n],
+        let (mut black, prev_depth) = match out.last() {
+            Some(prev) => (
+                reproject(&lc, &prev.plane, &prev.umbra, &plane),
+                depth_up(prev.plane.x - x),
+            ),
+            None => (vec![false; n * n], 0.0),
         };
+        let mut depth: Vec<f32> = black
+            .iter()
+            .map(|&b| if b { prev_depth } else { f32::INFINITY })
+            .collect();
         for j in 0..n {
             for i in 0..n {
-                if drawn.at(i, j).is_finite() {
+                let d = drawn.at(i, j);
+                if d.is_finite() {
                     black[j * n + i] = true;
+                    depth[j * n + i] = depth[j * n + i].min(d);
                 }
             }
         }
-        ground_black(&plane, &mut black);
+        let mut ground = vec![false; n * n];
+        ground_black(&plane, &mut ground);
+        for (k, g) in ground.iter().enumerate() {
+            if *g {
+                black[k] = true;
+                depth[k] = depth[k].min(0.0);
+            }
+        }
         out.push(SweepPlane {
             plane,
             cell: lc,
             umbra: OcclusionMap::new(n, black),
+            depth: DepthMap::new(n, depth),
         });
     }
     out.retain(|p| p.umbra.count() > 0);
@@ -329,6 +405,37 @@ fn void_projection(o: &LocalOccluder, lc: &LocalBox, cell: DVec2, x: f64, ps: DV
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Five planes of the K = 5 spacing from 2 m crowd within 2–3.5 m of a 0.5 m
+    /// cell; the kernel grows until they reach `sweep_reach_m`. Fifteen planes
+    /// already reach it with K = 5 and are left as they are.
+    #[test]
+    fn few_planes_reach_as_far_as_asked() {
+        use sightline_scene::{Object, Scene};
+        let scene = std::sync::Arc::new(Scene::from_objects(vec![Object::rect_block(
+            10.0, 10.0, 12.0, 12.0, 5.0,
+        )]));
+        let params = super::super::Params {
+            sweep: true,
+            resolution_px: 512,
+            ..super::super::Params::default()
+        };
+        let ext = ExtProj::new(scene, params);
+        let lc = Direction::PosX.box_to_local(DVec3::ZERO, DVec3::new(0.5, 0.5, 0.5));
+        let (x0, x1) = (lc.max.x + 2.0, lc.max.x + 300.0);
+        let paper = spaced_positions(&ext, &lc, x0, x1, 5, 5);
+        assert_eq!(paper.len(), 5);
+        assert!(paper[4] - lc.max.x < 4.0, "{paper:?}");
+        let ours = plane_positions(&ext, &lc, x0, x1, 5);
+        assert_eq!(ours.len(), 5);
+        assert!(ours[4] - lc.max.x >= ext.params.sweep_reach_m, "{ours:?}");
+        assert!(ours.windows(2).all(|w| w[1] > w[0]));
+        let fifteen = plane_positions(&ext, &lc, x0, x1, 15);
+        assert_eq!(fifteen, spaced_positions(&ext, &lc, x0, x1, 15, 5));
+        // Planes never go beyond the last occluder.
+        let short = plane_positions(&ext, &lc, x0, x0 + 5.0, 5);
+        assert!(short.iter().all(|&x| x <= x0 + 5.0) && !short.is_empty());
+    }
 
     #[test]
     fn equivalent_cell_contains_the_face_and_grows() {
