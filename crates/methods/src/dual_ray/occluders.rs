@@ -85,9 +85,10 @@ pub(crate) struct Slab {
     pub len: u32,
 }
 
-/// A uniform grid of slab ids over the scene (per axis, in local coordinates).
+/// A uniform grid of the ids of boxes (slabs, prisms) over the scene, in local
+/// coordinates: each id is in every bucket its box meets.
 #[derive(Clone, Debug)]
-pub(crate) struct SlabGrid {
+pub(crate) struct BucketGrid {
     pub origin: DVec2,
     pub cell_m: f64,
     pub nx: usize,
@@ -97,7 +98,64 @@ pub(crate) struct SlabGrid {
     pub ids: Vec<u32>,
 }
 
-impl SlabGrid {
+impl BucketGrid {
+    /// The grid of `boxes` (`(min, max)`, id = index), with buckets of
+    /// `cell_m(extent, count)` metres.
+    pub(crate) fn from_boxes(
+        boxes: &[(DVec2, DVec2)],
+        cell_m: impl FnOnce(DVec2, usize) -> f64,
+    ) -> Self {
+        let mut min = DVec2::splat(f64::INFINITY);
+        let mut max = DVec2::splat(f64::NEG_INFINITY);
+        for (a, b) in boxes {
+            min = min.min(*a);
+            max = max.max(*b);
+        }
+        if boxes.is_empty() {
+            min = DVec2::ZERO;
+            max = DVec2::ONE;
+        }
+        let ext = (max - min).max(DVec2::splat(1.0));
+        let cell_m = cell_m(ext, boxes.len());
+        let nx = ((ext.x / cell_m).ceil() as usize).max(1);
+        let ny = ((ext.y / cell_m).ceil() as usize).max(1);
+        let mut grid = BucketGrid {
+            origin: min,
+            cell_m,
+            nx,
+            ny,
+            start: vec![0; nx * ny + 1],
+            ids: Vec::new(),
+        };
+        let range = |g: &BucketGrid, (a, b): &(DVec2, DVec2)| {
+            (g.col(a.x), g.col(b.x), g.row(a.y), g.row(b.y))
+        };
+        for bx in boxes {
+            let (c0, c1, r0, r1) = range(&grid, bx);
+            for r in r0..=r1 {
+                for c in c0..=c1 {
+                    grid.start[r * nx + c + 1] += 1;
+                }
+            }
+        }
+        for i in 0..nx * ny {
+            grid.start[i + 1] += grid.start[i];
+        }
+        let mut fill = grid.start.clone();
+        grid.ids = vec![0; grid.start[nx * ny] as usize];
+        for (id, bx) in boxes.iter().enumerate() {
+            let (c0, c1, r0, r1) = range(&grid, bx);
+            for r in r0..=r1 {
+                for c in c0..=c1 {
+                    let b = r * nx + c;
+                    grid.ids[fill[b] as usize] = id as u32;
+                    fill[b] += 1;
+                }
+            }
+        }
+        grid
+    }
+
     #[inline]
     pub(crate) fn col(&self, x: f64) -> usize {
         (((x - self.origin.x) / self.cell_m).floor().max(0.0) as usize).min(self.nx - 1)
@@ -118,7 +176,7 @@ impl SlabGrid {
 pub(crate) struct Decomposition {
     pub slabs: Vec<Slab>,
     pub traps: Vec<Trap>,
-    pub grid: SlabGrid,
+    pub grid: BucketGrid,
 }
 
 /// Collect the ground-based occluder prisms of every object's inner bound, translated by
@@ -396,55 +454,13 @@ fn proper_crossing_x(e: &Edge, f: &Edge) -> Option<f64> {
     Some((e.a.x + t * r.x).clamp(e.a.x.max(f.a.x), e.b.x.min(f.b.x)))
 }
 
-fn build_grid(slabs: &[Slab]) -> SlabGrid {
-    let mut min = DVec2::splat(f64::INFINITY);
-    let mut max = DVec2::splat(f64::NEG_INFINITY);
-    for s in slabs {
-        min = min.min(DVec2::new(s.x0, s.y_min));
-        max = max.max(DVec2::new(s.x1, s.y_max));
-    }
-    if slabs.is_empty() {
-        min = DVec2::ZERO;
-        max = DVec2::ONE;
-    }
-    let ext = (max - min).max(DVec2::splat(1.0));
+fn build_grid(slabs: &[Slab]) -> BucketGrid {
+    let boxes: Vec<(DVec2, DVec2)> = slabs
+        .iter()
+        .map(|s| (DVec2::new(s.x0, s.y_min), DVec2::new(s.x1, s.y_max)))
+        .collect();
     // About 16 m buckets, at most 2048 per side.
-    let cell_m = (ext.x.max(ext.y) / 2048.0).max(16.0);
-    let nx = ((ext.x / cell_m).ceil() as usize).max(1);
-    let ny = ((ext.y / cell_m).ceil() as usize).max(1);
-    let mut grid = SlabGrid {
-        origin: min,
-        cell_m,
-        nx,
-        ny,
-        start: vec![0; nx * ny + 1],
-        ids: Vec::new(),
-    };
-    let range = |g: &SlabGrid, s: &Slab| (g.col(s.x0), g.col(s.x1), g.row(s.y_min), g.row(s.y_max));
-    for s in slabs {
-        let (c0, c1, r0, r1) = range(&grid, s);
-        for r in r0..=r1 {
-            for c in c0..=c1 {
-                grid.start[r * nx + c + 1] += 1;
-            }
-        }
-    }
-    for i in 0..nx * ny {
-        grid.start[i + 1] += grid.start[i];
-    }
-    let mut fill = grid.start.clone();
-    grid.ids = vec![0; grid.start[nx * ny] as usize];
-    for (id, s) in slabs.iter().enumerate() {
-        let (c0, c1, r0, r1) = range(&grid, s);
-        for r in r0..=r1 {
-            for c in c0..=c1 {
-                let b = r * nx + c;
-                grid.ids[fill[b] as usize] = id as u32;
-                fill[b] += 1;
-            }
-        }
-    }
-    grid
+    BucketGrid::from_boxes(&boxes, |ext, _| (ext.x.max(ext.y) / 2048.0).max(16.0))
 }
 
 #[cfg(test)]

@@ -24,7 +24,7 @@
 //! of the scene could reach further on, so azimuths into a facade cost a few buckets and
 //! only the ones along open streets run far.
 
-use super::occluders::{Occluder, GROUND_EPS_M};
+use super::occluders::{BucketGrid, Occluder, GROUND_EPS_M};
 use sightline_geom::{Aabb3, DVec2};
 use sightline_scene::Scene;
 
@@ -69,13 +69,7 @@ struct Prism {
 pub(crate) struct SeedGrid {
     prisms: Vec<Prism>,
     edges: Vec<[DVec2; 2]>,
-    origin: DVec2,
-    cell_m: f64,
-    nx: usize,
-    ny: usize,
-    /// CSR: bucket `i` holds `ids[start[i]..start[i + 1]]`.
-    start: Vec<u32>,
-    ids: Vec<u32>,
+    grid: BucketGrid,
     /// Tallest prism top per bucket.
     bucket_top: Vec<f64>,
     /// Tallest prism top.
@@ -140,78 +134,26 @@ impl SeedGrid {
                 push(&mut rings, p.base, p.top, id as u32, &mut prisms);
             }
         }
-        let mut min = DVec2::splat(f64::INFINITY);
-        let mut max = DVec2::splat(f64::NEG_INFINITY);
-        for (a, b) in &boxes {
-            min = min.min(*a);
-            max = max.max(*b);
-        }
-        if boxes.is_empty() {
-            min = DVec2::ZERO;
-            max = DVec2::ONE;
-        }
-        let ext = (max - min).max(DVec2::splat(1.0));
         // About two prisms per bucket, at most 4096 buckets per side.
-        let per = (ext.x * ext.y / boxes.len().max(1) as f64).sqrt() * 1.5;
-        let cell_m = per.max(ext.x.max(ext.y) / 4096.0).max(4.0);
-        let nx = ((ext.x / cell_m).ceil() as usize).max(1);
-        let ny = ((ext.y / cell_m).ceil() as usize).max(1);
-        let mut g = SeedGrid {
+        let grid = BucketGrid::from_boxes(&boxes, |ext, n| {
+            let per = (ext.x * ext.y / n.max(1) as f64).sqrt() * 1.5;
+            per.max(ext.x.max(ext.y) / 4096.0).max(4.0)
+        });
+        let bucket_top = (0..grid.nx * grid.ny)
+            .map(|b| {
+                grid.ids[grid.start[b] as usize..grid.start[b + 1] as usize]
+                    .iter()
+                    .map(|&i| prisms[i as usize].top)
+                    .fold(f64::NEG_INFINITY, f64::max)
+            })
+            .collect();
+        SeedGrid {
             max_top: prisms.iter().map(|p| p.top).fold(0.0, f64::max),
             prisms,
             edges,
-            origin: min,
-            cell_m,
-            nx,
-            ny,
-            start: vec![0; nx * ny + 1],
-            ids: Vec::new(),
-            bucket_top: vec![f64::NEG_INFINITY; nx * ny],
-        };
-        let range = |g: &SeedGrid, (a, b): &(DVec2, DVec2)| {
-            (g.col(a.x), g.col(b.x), g.row(a.y), g.row(b.y))
-        };
-        for bx in &boxes {
-            let (c0, c1, r0, r1) = range(&g, bx);
-            for r in r0..=r1 {
-                for c in c0..=c1 {
-                    g.start[r * nx + c + 1] += 1;
-                }
-            }
+            grid,
+            bucket_top,
         }
-        for i in 0..nx * ny {
-            g.start[i + 1] += g.start[i];
-        }
-        let mut fill = g.start.clone();
-        g.ids = vec![0; g.start[nx * ny] as usize];
-        for (id, bx) in boxes.iter().enumerate() {
-            let (c0, c1, r0, r1) = range(&g, bx);
-            for r in r0..=r1 {
-                for c in c0..=c1 {
-                    let b = r * nx + c;
-                    g.ids[fill[b] as usize] = id as u32;
-                    fill[b] += 1;
-                    g.bucket_top[b] = g.bucket_top[b].max(g.prisms[id].top);
-                }
-            }
-        }
-        g
-    }
-
-    #[inline]
-    fn col(&self, x: f64) -> usize {
-        (((x - self.origin.x) / self.cell_m).floor().max(0.0) as usize).min(self.nx - 1)
-    }
-
-    #[inline]
-    fn row(&self, y: f64) -> usize {
-        (((y - self.origin.y) / self.cell_m).floor().max(0.0) as usize).min(self.ny - 1)
-    }
-
-    #[inline]
-    fn bucket(&self, c: usize, r: usize) -> &[u32] {
-        let i = r * self.nx + c;
-        &self.ids[self.start[i] as usize..self.start[i + 1] as usize]
     }
 
     fn prism_edges(&self, p: &Prism) -> &[[DVec2; 2]] {
@@ -222,25 +164,29 @@ impl SeedGrid {
     /// is inside it or above or below it, where the first edge a ray crosses is not its
     /// entry; such eyes are skipped.
     fn occupied(&self, q: DVec2) -> bool {
-        self.bucket(self.col(q.x), self.row(q.y)).iter().any(|&i| {
-            let edges = self.prism_edges(&self.prisms[i as usize]);
-            let mut inside = false;
-            for [a, b] in edges {
-                if (*b - *a).perp_dot(q - *a) == 0.0
-                    && q.x >= a.x.min(b.x)
-                    && q.x <= a.x.max(b.x)
-                    && q.y >= a.y.min(b.y)
-                    && q.y <= a.y.max(b.y)
-                {
-                    return true;
+        self.grid
+            .bucket(self.grid.col(q.x), self.grid.row(q.y))
+            .iter()
+            .any(|&i| {
+                let edges = self.prism_edges(&self.prisms[i as usize]);
+                let mut inside = false;
+                for [a, b] in edges {
+                    if (*b - *a).perp_dot(q - *a) == 0.0
+                        && q.x >= a.x.min(b.x)
+                        && q.x <= a.x.max(b.x)
+                        && q.y >= a.y.min(b.y)
+                        && q.y <= a.y.max(b.y)
+                    {
+                        return true;
+                    }
+                    if (a.y > q.y) != (b.y > q.y)
+                        && q.x < a.x + (q.y - a.y) * (b.x - a.x) / (b.y - a.y)
+                    {
+                        inside = !inside;
+                    }
                 }
-                if (a.y > q.y) != (b.y > q.y) && q.x < a.x + (q.y - a.y) * (b.x - a.x) / (b.y - a.y)
-                {
-                    inside = !inside;
-                }
-            }
-            inside
-        })
+                inside
+            })
     }
 
     /// Mark in `seen` every object reached first by a ray from one of the eyes on the
@@ -344,11 +290,12 @@ impl SeedGrid {
         let mut marked = 0;
         let mut horizon = f64::NEG_INFINITY;
         // Start where the ray enters the grid (an eye may stand outside it).
-        let hi = self.origin + DVec2::new(self.nx as f64, self.ny as f64) * self.cell_m;
+        let hi = self.grid.origin
+            + DVec2::new(self.grid.nx as f64, self.grid.ny as f64) * self.grid.cell_m;
         let (mut t_in, mut t_out) = (0.0f64, f64::INFINITY);
         for (p, dd, lo, hi) in [
-            (eye.x, d.x, self.origin.x, hi.x),
-            (eye.y, d.y, self.origin.y, hi.y),
+            (eye.x, d.x, self.grid.origin.x, hi.x),
+            (eye.y, d.y, self.grid.origin.y, hi.y),
         ] {
             if dd == 0.0 {
                 if p < lo || p >= hi {
@@ -364,27 +311,27 @@ impl SeedGrid {
             return (0, sig);
         }
         let start = eye + d * t_in;
-        let (mut c, mut r) = (self.col(start.x) as i64, self.row(start.y) as i64);
+        let (mut c, mut r) = (self.grid.col(start.x) as i64, self.grid.row(start.y) as i64);
         let step_c: i64 = if d.x > 0.0 { 1 } else { -1 };
         let step_r: i64 = if d.y > 0.0 { 1 } else { -1 };
         let next = |idx: i64, step: i64, o: f64, p: f64, dd: f64| -> f64 {
             if dd == 0.0 {
                 return f64::INFINITY;
             }
-            let edge = o + (idx + i64::from(step > 0)) as f64 * self.cell_m;
+            let edge = o + (idx + i64::from(step > 0)) as f64 * self.grid.cell_m;
             ((edge - p) / dd).max(0.0)
         };
-        let mut t_c = next(c, step_c, self.origin.x, eye.x, d.x);
-        let mut t_r = next(r, step_r, self.origin.y, eye.y, d.y);
+        let mut t_c = next(c, step_c, self.grid.origin.x, eye.x, d.x);
+        let mut t_r = next(r, step_r, self.grid.origin.y, eye.y, d.y);
         let dt_c = if d.x == 0.0 {
             f64::INFINITY
         } else {
-            self.cell_m / d.x.abs()
+            self.grid.cell_m / d.x.abs()
         };
         let dt_r = if d.y == 0.0 {
             f64::INFINITY
         } else {
-            self.cell_m / d.y.abs()
+            self.grid.cell_m / d.y.abs()
         };
         let mut t0 = t_in;
         loop {
@@ -396,7 +343,7 @@ impl SeedGrid {
             }
             let events = &mut s.events;
             events.clear();
-            let b = r as usize * self.nx + c as usize;
+            let b = r as usize * self.grid.nx + c as usize;
             // A bucket whose tallest prism stays under the horizon changes nothing (the
             // slope to a top under the eye is highest at the bucket's far end).
             let top = self.bucket_top[b] - z;
@@ -404,7 +351,7 @@ impl SeedGrid {
             let bucket = if t0 > 0.0 && horizon >= reach {
                 &[][..]
             } else {
-                self.bucket(c as usize, r as usize)
+                self.grid.bucket(c as usize, r as usize)
             };
             for &i in bucket {
                 if s.stamp[i as usize] == gen {
@@ -467,7 +414,7 @@ impl SeedGrid {
                 r += step_r;
                 t_r += dt_r;
             }
-            if c < 0 || r < 0 || c >= self.nx as i64 || r >= self.ny as i64 {
+            if c < 0 || r < 0 || c >= self.grid.nx as i64 || r >= self.grid.ny as i64 {
                 break;
             }
             t0 = t1;
