@@ -9,10 +9,14 @@
 //! median and p90, mean hidden %, median ms/cell (single thread, preparation excluded)
 //! and the mean PVS size. `EXTPROJ_VARIANTS` selects the variants (comma-separated,
 //! see [`variant`]: `default`, or settings such as `improved=0` or `res=512+sa=0`);
-//! `EXTPROJ_DIAG=1` lists, per cell, the objects erosion hides and ext-proj keeps.
+//! `EXTPROJ_DIAG=1` lists, per cell, the objects erosion hides and ext-proj keeps;
+//! `EXTPROJ_DIAG=2` classifies them by their best plane: Projection off every plane,
+//! or the fraction of its pixels covered by nearer occluders (≥ 90 %: a near miss).
 
 use sightline_geom::ViewCell;
 use sightline_methods::check::{ground_truth, street_cells, TruthOptions};
+use sightline_methods::ext_proj::depth_map::{depth_down, pixel_range};
+use sightline_methods::ext_proj::occludee::occludee_projection;
 use sightline_methods::ext_proj::{ExtProj, Params};
 use sightline_methods::{create, MethodOptions, VisibilityMethod};
 use sightline_scene::import::{load, ImportOptions};
@@ -169,6 +173,49 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             ms.push(t.elapsed().as_secs_f64() * 1e3);
         }
         print(name.trim(), &pvs, Some(quantile(&ms, 0.5)));
+        if std::env::var("EXTPROJ_DIAG").is_ok_and(|v| v == "2") {
+            let (mut off, mut near, mut far, mut total) = (0usize, 0usize, 0usize, 0usize);
+            for (k, (p, e)) in pvs.iter().zip(&cached.erosion).enumerate() {
+                let es: BTreeSet<u32> = e.iter().copied().collect();
+                let maps = m.plane_maps(&cells[k]);
+                for &id in p.iter().filter(|i| !es.contains(i)) {
+                    total += 1;
+                    let b = scene.objects[id as usize].bounds;
+                    let mut best: Option<f64> = None;
+                    for pm in &maps {
+                        let occ = pm.plane.dir.box_to_local(b.min, b.max);
+                        let Some((rect, depth)) =
+                            occludee_projection(&pm.cell, &occ, pm.plane.x, true)
+                        else {
+                            continue;
+                        };
+                        let r = pixel_range(
+                            pm.plane.to_px(rect.min),
+                            pm.plane.to_px(rect.max),
+                            pm.map.n,
+                        );
+                        let Some([i0, j0, i1, j1]) = r else { continue };
+                        let d = depth_down(depth);
+                        let mut ok = 0usize;
+                        for j in j0..=j1 {
+                            for i in i0..=i1 {
+                                ok += (pm.map.at(i, j) < d) as usize;
+                            }
+                        }
+                        let f = ok as f64 / ((i1 + 1 - i0) * (j1 + 1 - j0)) as f64;
+                        best = Some(best.map_or(f, |g: f64| g.max(f)));
+                    }
+                    match best {
+                        None => off += 1,
+                        Some(f) if f >= 0.9 => near += 1,
+                        Some(_) => far += 1,
+                    }
+                }
+            }
+            println!(
+                "  kept but erosion-hidden: {total}: off every plane {off}, best plane >= 90 % covered {near}, < 90 % {far}"
+            );
+        }
         if std::env::var("EXTPROJ_DIAG").is_ok_and(|v| v == "1") {
             for (k, (p, e)) in pvs.iter().zip(&cached.erosion).enumerate() {
                 let es: BTreeSet<u32> = e.iter().copied().collect();

@@ -62,7 +62,7 @@ fn method_is_created_by_name_and_records_its_parameters() {
     assert!(m
         .params()
         .iter()
-        .any(|(k, v)| k == "resolution" && v == "256"));
+        .any(|(k, v)| k == "resolution" && v == "512"));
     let c = cell("0,-2,1.5,4,2,2");
     assert_eq!(m.pvs(&c).expect("pvs"), pvs(&scene, &c, Params::default()));
 }
