@@ -102,14 +102,11 @@ fn sweep_is_conservative_and_never_adds_objects() {
     assert!(missed.is_empty(), "missed {missed:?}");
 }
 
-/// Leaves alone fill the sweep's occlusion maps: thousands of fully black pixels
-/// appear where no prism occludes (only the thin trunks are prisms).
-#[test]
-fn leaves_fill_the_occlusion_maps() {
-    let scene = Arc::new(forest(5, 7, 300));
-    let c: ViewCell = "0,-1,1.5,2,1,2".parse().expect("cell");
+/// A 15-plane sweep of a small forest (5 × 7 trees of 300 leaves) and a 2 m cell
+/// inside it.
+fn small_forest_sweep() -> (ExtProj, ViewCell) {
     let e = ExtProj::new(
-        scene.clone(),
+        Arc::new(forest(5, 7, 300)),
         Params {
             sweep: true,
             sweep_planes: 15,
@@ -118,6 +115,14 @@ fn leaves_fill_the_occlusion_maps() {
             ..Params::default()
         },
     );
+    (e, "0,-1,1.5,2,1,2".parse().expect("cell"))
+}
+
+/// Leaves alone fill the sweep's occlusion maps: thousands of fully black pixels
+/// appear where no prism occludes (only the thin trunks are prisms).
+#[test]
+fn leaves_fill_the_occlusion_maps() {
+    let (e, c) = small_forest_sweep();
     let sw = sightline_methods::ext_proj::sweep::Sweep::run(&e, &c);
     let best = sw.planes.iter().map(|p| p.umbra.count()).max().unwrap_or(0);
     assert!(best > 5000, "{best}");
@@ -183,18 +188,7 @@ fn sweep_culls_the_dense_generated_forest_without_missing() {
 /// plane's depth, so only boxes between two consecutive planes can use it.
 #[test]
 fn improved_projection_on_sweep_planes() {
-    let scene = Arc::new(forest(5, 7, 300));
-    let c: ViewCell = "0,-1,1.5,2,1,2".parse().expect("cell");
-    let e = ExtProj::new(
-        scene.clone(),
-        Params {
-            sweep: true,
-            sweep_planes: 15,
-            resolution_px: 256,
-            kernel_px: 9,
-            ..Params::default()
-        },
-    );
+    let (e, c) = small_forest_sweep();
     let sw = sightline_methods::ext_proj::sweep::Sweep::run(&e, &c);
     let mut hidden = 0;
     for i in 0..40 {
