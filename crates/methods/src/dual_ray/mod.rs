@@ -245,8 +245,7 @@ impl DualRay {
 
     /// The PVS of `cell` and the counters of its traversal.
     pub fn pvs_with_stats(&self, cell: &ViewCell) -> (Vec<u32>, TraversalStats) {
-        let o3 = self.origin.extend(0.0);
-        let a = Aabb3::new(cell.min - o3, cell.max - o3);
+        let a = self.local(cell);
         let mut scratch = Scratch::default();
         let mut stats = TraversalStats::default();
         let mut out: Vec<u32> = self.always.clone();
@@ -295,14 +294,21 @@ impl DualRay {
     /// The objects the seed rays of `cell` meet first (sorted): reported without a test.
     /// Every one of them is in the `dual-ray-exact` PVS of the cell.
     pub fn seed_objects(&self, cell: &ViewCell) -> Vec<u32> {
-        let o3 = self.origin.extend(0.0);
-        let a = Aabb3::new(cell.min - o3, cell.max - o3);
         let mut seen = vec![false; self.scene.objects.len()];
-        self.seed
-            .mark(&a, &mut seen, &mut seed::SeedScratch::default());
+        self.seed.mark(
+            &self.local(cell),
+            &mut seen,
+            &mut seed::SeedScratch::default(),
+        );
         (0..seen.len() as u32)
             .filter(|i| seen[*i as usize])
             .collect()
+    }
+
+    /// `cell` in the local frame (scene coordinates minus `origin`).
+    fn local(&self, cell: &ViewCell) -> Aabb3 {
+        let o3 = self.origin.extend(0.0);
+        Aabb3::new(cell.min - o3, cell.max - o3)
     }
 
     /// The objects met first by the seed rays from `a` (local frame), and the kd-nodes
