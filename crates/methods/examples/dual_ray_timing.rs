@@ -22,6 +22,13 @@ fn median(v: &mut [f64]) -> f64 {
     }
 }
 
+/// CPU time of the calling thread (ns), from Linux's `/proc/thread-self/schedstat`:
+/// steadier than wall time on a shared machine.
+fn thread_cpu_ns() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    s.split_whitespace().next()?.parse().ok()
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let n: usize = args.get(1).map_or(Ok(100_000), |s| s.parse())?;
@@ -47,17 +54,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     match mode {
         "cells" => {
             let mut ms = Vec::new();
+            let mut cpu = Vec::new();
             for c in &cells {
                 let t = Instant::now();
+                let c0 = thread_cpu_ns();
                 let (pvs, st) = m.pvs_with_stats(c);
                 let dt = t.elapsed().as_secs_f64() * 1e3;
+                if let (Some(a), Some(b)) = (c0, thread_cpu_ns()) {
+                    cpu.push((b - a) as f64 * 1e-6);
+                }
                 println!("{c}: {dt:.1} ms, pvs {}, {st:?}", pvs.len());
                 ms.push(dt);
             }
             println!(
-                "{size} m cells at {res}²: median {:.1} ms/cell over {} cells (single thread)",
+                "{size} m cells at {res}²: median {:.1} ms/cell over {} cells (single thread; \
+                 CPU median {:.1} ms, total {:.0} ms)",
                 median(&mut ms),
-                cells.len()
+                cells.len(),
+                median(&mut cpu),
+                cpu.iter().sum::<f64>()
             );
         }
         "nine" => {

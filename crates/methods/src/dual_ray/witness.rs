@@ -11,8 +11,8 @@
 //! containing `w` is ever covered (§5.2). The exact algorithm answers "visible" for it
 //! too (§5.1). So the witness changes no PVS, only the time to reach it.
 //!
-//! Candidates come from the occluders gathered first (next to the far box): the gaps of
-//! their blocked intervals at a few `w`, widest first. Each is verified against the near
+//! Candidates come from the occluders gathered first (next to the narrower box): the gaps
+//! of their blocked intervals at a few `w`, widest first. Each is verified against the near
 //! pieces and then against the rest of the shaft along its own line only
 //! ([`Planar::far_ray_clear`]), stopping at the first piece that blocks it.
 
