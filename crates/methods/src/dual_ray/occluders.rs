@@ -156,6 +156,19 @@ impl BucketGrid {
         grid
     }
 
+    /// Per bucket, the largest `value` of its ids (−∞ for an empty bucket).
+    pub(crate) fn max_per_bucket(&self, value: impl Fn(u32) -> f64) -> Vec<f64> {
+        self.start
+            .windows(2)
+            .map(|w| {
+                self.ids[w[0] as usize..w[1] as usize]
+                    .iter()
+                    .map(|&i| value(i))
+                    .fold(f64::NEG_INFINITY, f64::max)
+            })
+            .collect()
+    }
+
     #[inline]
     pub(crate) fn col(&self, x: f64) -> usize {
         (((x - self.origin.x) / self.cell_m).floor().max(0.0) as usize).min(self.nx - 1)
@@ -177,6 +190,8 @@ pub(crate) struct Decomposition {
     pub slabs: Vec<Slab>,
     pub traps: Vec<Trap>,
     pub grid: BucketGrid,
+    /// Tallest slab (`h_max`) per bucket of `grid`.
+    pub bucket_top: Vec<f64>,
 }
 
 /// Collect the ground-based occluder prisms of every object's inner bound, translated by
@@ -280,7 +295,13 @@ pub(crate) fn decompose(occ: &[Occluder], clusters: &[Vec<u32>], axis: Axis) -> 
         decompose_cluster(occ, cl, axis, &mut slabs, &mut traps);
     }
     let grid = build_grid(&slabs);
-    Decomposition { slabs, traps, grid }
+    let bucket_top = grid.max_per_bucket(|i| slabs[i as usize].h_max);
+    Decomposition {
+        slabs,
+        traps,
+        grid,
+        bucket_top,
+    }
 }
 
 fn decompose_cluster(

@@ -366,7 +366,13 @@ impl Planar {
             let ylo = lower(cx0).min(lower(cx1));
             let yhi = upper(cx0).max(upper(cx1));
             let (r0, r1) = (g.row(ylo), g.row(yhi));
+            // A bucket whose every slab stays under `T` over this column adds nothing
+            // here; a slab of it reaching into other columns is cut when met there.
+            let floor = ceiling.at(cx0).min(ceiling.at(cx1));
             for r in r0..=r1 {
+                if decomp.bucket_top[r * g.nx + c] <= floor {
+                    continue;
+                }
                 for &id in g.bucket(c, r) {
                     let st = &mut scratch.stamp[id as usize];
                     if *st == gen {
@@ -444,7 +450,11 @@ impl Planar {
                 let cx1 = (g.origin.x + (c + 1) as f64 * g.cell_m).min(f1);
                 let (y0, y1) = (ray_y(cx0), ray_y(cx1));
                 let (r0, r1) = (g.row(y0.min(y1) - margin), g.row(y0.max(y1) + margin));
+                let floor = p.ceiling.at(cx0).min(p.ceiling.at(cx1));
                 for r in r0..=r1 {
+                    if decomp.bucket_top[r * g.nx + c] <= floor {
+                        continue;
+                    }
                     for &id in g.bucket(c, r) {
                         let st = &mut scratch.stamp[id as usize];
                         if *st == gen {

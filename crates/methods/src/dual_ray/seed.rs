@@ -139,14 +139,7 @@ impl SeedGrid {
             let per = (ext.x * ext.y / n.max(1) as f64).sqrt() * 1.5;
             per.max(ext.x.max(ext.y) / 4096.0).max(4.0)
         });
-        let bucket_top = (0..grid.nx * grid.ny)
-            .map(|b| {
-                grid.ids[grid.start[b] as usize..grid.start[b + 1] as usize]
-                    .iter()
-                    .map(|&i| prisms[i as usize].top)
-                    .fold(f64::NEG_INFINITY, f64::max)
-            })
-            .collect();
+        let bucket_top = grid.max_per_bucket(|i| prisms[i as usize].top);
         SeedGrid {
             max_top: prisms.iter().map(|p| p.top).fold(0.0, f64::max),
             prisms,
