@@ -356,47 +356,31 @@ impl Planar {
         p.gb = gb;
 
         // Walk the grid columns between the faces, rows within the shaft's hull.
-        let g = &decomp.grid;
         let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
         let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
-        let (c0, c1) = (g.col(ga), g.col(gb));
-        for c in c0..=c1 {
-            let cx0 = (g.origin.x + c as f64 * g.cell_m).max(ga);
-            let cx1 = (g.origin.x + (c + 1) as f64 * g.cell_m).min(gb);
-            let ylo = lower(cx0).min(lower(cx1));
-            let yhi = upper(cx0).max(upper(cx1));
-            let (r0, r1) = (g.row(ylo), g.row(yhi));
-            // A bucket whose every slab stays under `T` over this column adds nothing
-            // here; a slab of it reaching into other columns is cut when met there.
-            let floor = ceiling.at(cx0).min(ceiling.at(cx1));
-            for r in r0..=r1 {
-                if decomp.bucket_top[r * g.nx + c] <= floor {
-                    continue;
-                }
-                for &id in g.bucket(c, r) {
-                    let st = &mut scratch.stamp[id as usize];
-                    if *st == gen {
-                        continue;
-                    }
-                    *st = gen;
-                    let slab = &decomp.slabs[id as usize];
-                    let traps =
-                        &decomp.traps[slab.first as usize..(slab.first + slab.len) as usize];
-                    cut_slab(
-                        slab,
-                        traps,
-                        &ceiling,
-                        (xa, ga, gb),
-                        yc,
-                        &lower,
-                        &upper,
-                        &mut scratch.cuts,
-                        &mut scratch.kept,
-                        &mut p.pieces,
-                    );
-                }
-            }
-        }
+        walk_slabs(
+            decomp,
+            &mut scratch.stamp,
+            gen,
+            (ga, gb),
+            &ceiling,
+            |cx0, cx1| (lower(cx0).min(lower(cx1)), upper(cx0).max(upper(cx1))),
+            |slab, traps| {
+                cut_slab(
+                    slab,
+                    traps,
+                    &ceiling,
+                    (xa, ga, gb),
+                    yc,
+                    &lower,
+                    &upper,
+                    &mut scratch.cuts,
+                    &mut scratch.kept,
+                    &mut p.pieces,
+                );
+                true
+            },
+        );
         // Nearest the cell first: the coverage rows of `discrete` fill up early.
         if !cell_low {
             p.pieces.reverse();
@@ -438,50 +422,41 @@ impl Planar {
         let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
         let ray_y = |x: f64| yc + u + (w - u) * ((x - xa) / len);
         let (a, b) = (DVec2::new(0.0, u), DVec2::new(len, w));
-        let g = &decomp.grid;
         // Rounding of the ray's height must not skip a bucket row.
         let margin = 1e-6 * (1.0 + yc.abs() + u.abs() + w.abs());
         for (f0, f1) in [(xa, p.ga), (p.gb, xb)] {
             if f1 <= f0 {
                 continue;
             }
-            for c in g.col(f0)..=g.col(f1) {
-                let cx0 = (g.origin.x + c as f64 * g.cell_m).max(f0);
-                let cx1 = (g.origin.x + (c + 1) as f64 * g.cell_m).min(f1);
-                let (y0, y1) = (ray_y(cx0), ray_y(cx1));
-                let (r0, r1) = (g.row(y0.min(y1) - margin), g.row(y0.max(y1) + margin));
-                let floor = p.ceiling.at(cx0).min(p.ceiling.at(cx1));
-                for r in r0..=r1 {
-                    if decomp.bucket_top[r * g.nx + c] <= floor {
-                        continue;
-                    }
-                    for &id in g.bucket(c, r) {
-                        let st = &mut scratch.stamp[id as usize];
-                        if *st == gen {
-                            continue;
-                        }
-                        *st = gen;
-                        let slab = &decomp.slabs[id as usize];
-                        let traps =
-                            &decomp.traps[slab.first as usize..(slab.first + slab.len) as usize];
-                        scratch.far.clear();
-                        cut_slab(
-                            slab,
-                            traps,
-                            &p.ceiling,
-                            (xa, f0, f1),
-                            yc,
-                            &lower,
-                            &upper,
-                            &mut scratch.cuts,
-                            &mut scratch.kept,
-                            &mut scratch.far,
-                        );
-                        if !scratch.far.iter().all(|q| ray_misses_piece(a, b, q)) {
-                            return false;
-                        }
-                    }
-                }
+            let clear = walk_slabs(
+                decomp,
+                &mut scratch.stamp,
+                gen,
+                (f0, f1),
+                &p.ceiling,
+                |cx0, cx1| {
+                    let (y0, y1) = (ray_y(cx0), ray_y(cx1));
+                    (y0.min(y1) - margin, y0.max(y1) + margin)
+                },
+                |slab, traps| {
+                    scratch.far.clear();
+                    cut_slab(
+                        slab,
+                        traps,
+                        &p.ceiling,
+                        (xa, f0, f1),
+                        yc,
+                        &lower,
+                        &upper,
+                        &mut scratch.cuts,
+                        &mut scratch.kept,
+                        &mut scratch.far,
+                    );
+                    scratch.far.iter().all(|q| ray_misses_piece(a, b, q))
+                },
+            );
+            if !clear {
+                return false;
             }
         }
         true
@@ -592,6 +567,47 @@ fn hull_sections(lo: &Rect, hi: &Rect) -> (f64, f64, f64, f64) {
 /// Cut one slab by the ceiling, clip it to the shaft and fuse its touching trapezoids
 /// into convex pieces.
 #[allow(clippy::too_many_arguments)]
+/// Visit once (per `gen` of `stamp`) each slab of `decomp` listed in the buckets of the
+/// grid columns over `[f0, f1]` whose rows meet `rows(cx0, cx1)` (a `y` range over the
+/// column's part `[cx0, cx1]`), until `visit` returns `false` (then `false`). A bucket
+/// whose tallest slab stays under `ceiling` over the column is skipped: a slab of it
+/// yields no piece there, and one reaching into other columns is visited there.
+fn walk_slabs(
+    decomp: &Decomposition,
+    stamp: &mut [u32],
+    gen: u32,
+    (f0, f1): (f64, f64),
+    ceiling: &Ceiling,
+    rows: impl Fn(f64, f64) -> (f64, f64),
+    mut visit: impl FnMut(&Slab, &[Trap]) -> bool,
+) -> bool {
+    let g = &decomp.grid;
+    for c in g.col(f0)..=g.col(f1) {
+        let cx0 = (g.origin.x + c as f64 * g.cell_m).max(f0);
+        let cx1 = (g.origin.x + (c + 1) as f64 * g.cell_m).min(f1);
+        let (ylo, yhi) = rows(cx0, cx1);
+        let floor = ceiling.at(cx0).min(ceiling.at(cx1));
+        for r in g.row(ylo)..=g.row(yhi) {
+            if decomp.bucket_top[r * g.nx + c] <= floor {
+                continue;
+            }
+            for &id in g.bucket(c, r) {
+                let st = &mut stamp[id as usize];
+                if *st == gen {
+                    continue;
+                }
+                *st = gen;
+                let slab = &decomp.slabs[id as usize];
+                let traps = &decomp.traps[slab.first as usize..(slab.first + slab.len) as usize];
+                if !visit(slab, traps) {
+                    return false;
+                }
+            }
+        }
+    }
+    true
+}
+
 fn cut_slab(
     slab: &Slab,
     traps: &[Trap],
