@@ -566,7 +566,6 @@ fn hull_sections(lo: &Rect, hi: &Rect) -> (f64, f64, f64, f64) {
 
 /// Cut one slab by the ceiling, clip it to the shaft and fuse its touching trapezoids
 /// into convex pieces.
-#[allow(clippy::too_many_arguments)]
 /// Visit once (per `gen` of `stamp`) each slab of `decomp` listed in the buckets of the
 /// grid columns over `[f0, f1]` whose rows meet `rows(cx0, cx1)` (a `y` range over the
 /// column's part `[cx0, cx1]`), until `visit` returns `false` (then `false`). A bucket
@@ -608,6 +607,7 @@ fn walk_slabs(
     true
 }
 
+#[allow(clippy::too_many_arguments)]
 fn cut_slab(
     slab: &Slab,
     traps: &[Trap],
