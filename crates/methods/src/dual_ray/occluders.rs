@@ -60,6 +60,8 @@ pub(crate) struct Occluder {
     pub height: f64,
     pub min: DVec2,
     pub max: DVec2,
+    /// The object whose inner bound this prism is.
+    pub object: u32,
 }
 
 /// A trapezoid of a slab: between the lines `bot` and `top` (y at the slab's `x0` and
@@ -198,7 +200,7 @@ pub(crate) struct Decomposition {
 /// `-origin`.
 pub(crate) fn collect_occluders(scene: &Scene, origin: DVec2) -> Vec<Occluder> {
     let mut out = Vec::new();
-    for o in &scene.objects {
+    for (id, o) in scene.objects.iter().enumerate() {
         for p in &o.inner {
             if p.base > GROUND_EPS_M || p.top <= GROUND_EPS_M || !p.top.is_finite() {
                 continue;
@@ -223,6 +225,7 @@ pub(crate) fn collect_occluders(scene: &Scene, origin: DVec2) -> Vec<Occluder> {
                 height: p.top,
                 min,
                 max,
+                object: id as u32,
             });
         }
     }
@@ -499,6 +502,7 @@ mod tests {
             height: h,
             min: DVec2::new(x0, y0),
             max: DVec2::new(x1, y1),
+            object: 0,
         }
     }
 

@@ -49,20 +49,35 @@ const CLEAR_MARGIN: f64 = 1e-9;
 pub(crate) struct SeedScratch {
     stamp: Vec<u32>,
     gen: u32,
-    events: Vec<(f64, f64, u32)>,
+    /// `(distance, last crossing, prism, as an occluder)`.
+    events: Vec<(f64, f64, u32, bool)>,
 }
 
-/// One prism of the seed: an occluder (ground-based inner prism) or an occludee (an
-/// object's outer prism).
+/// One prism of the seed: an occludee (an object's outer prism), an occluder (a
+/// ground-based inner prism), or both when an object's outer and inner prisms share
+/// their footprint (a 2.5D block): its edges are then crossed once per ray.
 #[derive(Clone, Copy, Debug)]
 struct Prism {
     /// Edges `edges[first..first + len]`.
     first: u32,
     len: u32,
+    /// The occludee: base and top of the outer prism of `object`.
     base: f64,
     top: f64,
-    /// The object an occludee prism belongs to; `u32::MAX` for an occluder.
+    /// The object of the occludee; `u32::MAX` for an occluder only.
     object: u32,
+    /// The occluder's top; −∞ for an occludee only.
+    occ_top: f64,
+}
+
+impl Prism {
+    fn occludes(&self) -> bool {
+        self.occ_top > f64::NEG_INFINITY
+    }
+    /// Tallest top of either role.
+    fn reach(&self) -> f64 {
+        self.top.max(self.occ_top)
+    }
 }
 
 /// The prisms of a scene in a uniform grid, in the method's local frame.
@@ -83,10 +98,9 @@ impl SeedGrid {
         let mut prisms = Vec::new();
         let mut edges: Vec<[DVec2; 2]> = Vec::new();
         let mut boxes: Vec<(DVec2, DVec2)> = Vec::new();
-        let mut push = |rings: &mut dyn Iterator<Item = Vec<DVec2>>,
-                        base: f64,
-                        top: f64,
-                        object: u32,
+        let mut push = |rings: &[Vec<DVec2>],
+                        (base, top, object): (f64, f64, u32),
+                        occ_top: f64,
                         prisms: &mut Vec<Prism>| {
             let first = edges.len() as u32;
             let mut min = DVec2::splat(f64::INFINITY);
@@ -102,36 +116,68 @@ impl SeedGrid {
             let len = edges.len() as u32 - first;
             // Flat objects on the ground (streets, squares) are never reached above the
             // ground by a ray, nor do they block one: they stay with the tests.
-            if len >= 3
-                && min.is_finite()
-                && max.is_finite()
-                && top.is_finite()
-                && top > GROUND_EPS_M
-            {
+            let top = if top.is_finite() && top > GROUND_EPS_M {
+                top
+            } else {
+                f64::NEG_INFINITY
+            };
+            let object = if top > f64::NEG_INFINITY {
+                object
+            } else {
+                u32::MAX
+            };
+            if len >= 3 && min.is_finite() && max.is_finite() && top.max(occ_top) > GROUND_EPS_M {
                 prisms.push(Prism {
                     first,
                     len,
                     base,
                     top,
                     object,
+                    occ_top,
                 });
                 boxes.push((min, max));
             } else {
                 edges.truncate(first as usize);
             }
         };
-        for o in occ {
-            let mut rings = o.rings.iter().cloned();
-            push(&mut rings, 0.0, o.height, u32::MAX, &mut prisms);
+        // Occluders by object (collected in object order).
+        let mut by_object: Vec<Vec<usize>> = vec![Vec::new(); scene.objects.len()];
+        for (k, o) in occ.iter().enumerate() {
+            if let Some(v) = by_object.get_mut(o.object as usize) {
+                v.push(k);
+            }
         }
+        let mut merged = vec![false; occ.len()];
         for (id, o) in scene.objects.iter().enumerate() {
             for p in &o.outer {
-                let mut rings = p
+                let rings: Vec<Vec<DVec2>> = p
                     .footprint
                     .rings()
                     .filter(|r| r.len() >= 3)
-                    .map(|r| r.iter().map(|v| *v - origin).collect::<Vec<_>>());
-                push(&mut rings, p.base, p.top, id as u32, &mut prisms);
+                    .map(|r| r.iter().map(|v| *v - origin).collect())
+                    .collect();
+                let same = by_object[id]
+                    .iter()
+                    .copied()
+                    .find(|&k| !merged[k] && occ[k].rings == rings);
+                let occ_top = match same {
+                    Some(k) => {
+                        merged[k] = true;
+                        occ[k].height
+                    }
+                    None => f64::NEG_INFINITY,
+                };
+                push(&rings, (p.base, p.top, id as u32), occ_top, &mut prisms);
+            }
+        }
+        for (k, o) in occ.iter().enumerate() {
+            if !merged[k] {
+                push(
+                    &o.rings,
+                    (0.0, f64::NEG_INFINITY, u32::MAX),
+                    o.height,
+                    &mut prisms,
+                );
             }
         }
         // About two prisms per bucket, at most 4096 buckets per side.
@@ -139,9 +185,9 @@ impl SeedGrid {
             let per = (ext.x * ext.y / n.max(1) as f64).sqrt() * 1.5;
             per.max(ext.x.max(ext.y) / 4096.0).max(4.0)
         });
-        let bucket_top = grid.max_per_bucket(|i| prisms[i as usize].top);
+        let bucket_top = grid.max_per_bucket(|i| prisms[i as usize].reach());
         SeedGrid {
-            max_top: prisms.iter().map(|p| p.top).fold(0.0, f64::max),
+            max_top: prisms.iter().map(|p| p.reach()).fold(0.0, f64::max),
             prisms,
             edges,
             grid,
@@ -351,7 +397,8 @@ impl SeedGrid {
                     continue;
                 }
                 let p = &self.prisms[i as usize];
-                if p.object != u32::MAX && seen[p.object as usize] {
+                let occludee = p.object != u32::MAX && !seen[p.object as usize];
+                if !occludee && !p.occludes() {
                     continue;
                 }
                 let Some((t, t_last)) = crossings(self.prism_edges(p), eye, d) else {
@@ -362,28 +409,26 @@ impl SeedGrid {
                 // entry into it (an entry rounded into the previous bucket comes late).
                 if t < t1 {
                     s.stamp[i as usize] = gen;
-                    events.push((t, t_last, i));
+                    if occludee {
+                        events.push((t, t_last, i, false));
+                    }
+                    if p.occludes() {
+                        events.push((t, t_last, i, true));
+                    }
                 }
             }
             // Occludees before occluders at the same distance: an object's own inner
             // prism does not hide its outer wall.
-            events.sort_unstable_by(|a, b| {
-                a.0.total_cmp(&b.0).then_with(|| {
-                    let oa = self.prisms[a.2 as usize].object == u32::MAX;
-                    let ob = self.prisms[b.2 as usize].object == u32::MAX;
-                    oa.cmp(&ob)
-                })
-            });
-            for &(t, t_last, i) in events.iter() {
+            events.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then_with(|| a.3.cmp(&b.3)));
+            for &(t, t_last, i, as_occluder) in events.iter() {
                 let p = &self.prisms[i as usize];
-                let slope_top = (p.top - z) / t;
-                if p.object == u32::MAX {
+                if as_occluder {
                     // An occluder below the eye blocks the descending rays that reach
                     // its top anywhere over it: up to the slope to its far side.
-                    let slope_top = if p.top < z {
-                        (p.top - z) / t_last
+                    let slope_top = if p.occ_top < z {
+                        (p.occ_top - z) / t_last
                     } else {
-                        slope_top
+                        (p.occ_top - z) / t
                     };
                     if slope_top > horizon {
                         horizon = slope_top;
@@ -391,6 +436,7 @@ impl SeedGrid {
                     }
                     continue;
                 }
+                let slope_top = (p.top - z) / t;
                 let low = horizon.max((p.base - z) / t).max(-z / t);
                 if slope_top > low + CLEAR_MARGIN * (1.0 + low.abs()) && !seen[p.object as usize] {
                     seen[p.object as usize] = true;
