@@ -123,7 +123,7 @@ fn small_forest_sweep() -> (ExtProj, ViewCell) {
 #[test]
 fn leaves_fill_the_occlusion_maps() {
     let (e, c) = small_forest_sweep();
-    let sw = sightline_methods::ext_proj::sweep::Sweep::run(&e, &c);
+    let sw = sightline_methods::ext_proj::sweep::Sweep::run(&e, &c, None);
     let best = sw.planes.iter().map(|p| p.umbra.count()).max().unwrap_or(0);
     assert!(best > 5000, "{best}");
 }
@@ -189,7 +189,7 @@ fn sweep_culls_the_dense_generated_forest_without_missing() {
 #[test]
 fn improved_projection_on_sweep_planes() {
     let (e, c) = small_forest_sweep();
-    let sw = sightline_methods::ext_proj::sweep::Sweep::run(&e, &c);
+    let sw = sightline_methods::ext_proj::sweep::Sweep::run(&e, &c, None);
     let mut hidden = 0;
     for i in 0..40 {
         for j in 0..30 {

@@ -455,10 +455,21 @@ impl ExtProj {
         self.plane_maps_for(cell, &all)
     }
 
+    /// The objects of `candidates` (sorted ids) as an occluder filter: `None` when
+    /// they are all the scene's objects.
+    fn occluder_filter<'a>(&self, candidates: &'a [u32]) -> Option<&'a [u32]> {
+        (candidates.len() < self.scene.objects.len()).then_some(candidates)
+    }
+
     /// The depth-mapped planes of `cell` (§6.1), chosen to hide the occludees of
-    /// `candidates` (object ids).
+    /// `candidates` (sorted object ids: the objects not yet known hidden from `cell`).
+    /// Occluders made only of other objects are left out: they are hidden from a
+    /// parent cell, hence from `cell` (§6.1, "we also use the PVS of the parent cell to
+    /// cull hidden occluders"), and leaving occluders out is always conservative.
     pub fn plane_maps_for(&self, cell: &ViewCell, candidates: &[u32]) -> Vec<PlaneMap> {
-        let ids = self.occluders.relevant(&cell.aabb());
+        let ids = self
+            .occluders
+            .relevant_among(&cell.aabb(), self.occluder_filter(candidates));
         let mut maps = Vec::new();
         for dir in Direction::ALL {
             let lc = dir.box_to_local(cell.min, cell.max);
@@ -521,11 +532,12 @@ impl ExtProj {
             && self.box_hidden(&hi, maps, extra, splits - 1)
     }
 
-    /// PVS of `cell` restricted to `candidates` (sorted object ids).
+    /// PVS of `cell` restricted to `candidates` (sorted object ids: all the objects,
+    /// or the PVS of a parent cell — the other objects, hidden, do not occlude either).
     pub fn pvs_among(&self, cell: &ViewCell, candidates: &[u32]) -> Vec<u32> {
         let maps = self.plane_maps_for(cell, candidates);
         let sweep = if self.params.sweep {
-            sweep::Sweep::run(self, cell)
+            sweep::Sweep::run(self, cell, self.occluder_filter(candidates))
         } else {
             sweep::Sweep::empty()
         };

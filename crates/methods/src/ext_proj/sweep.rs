@@ -108,15 +108,17 @@ impl Sweep {
         })
     }
 
-    /// Run the sweep in the six directions of `cell`.
-    pub fn run(ext: &ExtProj, cell: &ViewCell) -> Sweep {
-        let ids = ext.occluders.relevant(&cell.aabb());
+    /// Run the sweep in the six directions of `cell`, with the occluders (prisms and
+    /// leaves) made of some object of `candidates` (sorted ids; `None` = all: the
+    /// others are hidden from a parent cell, §6.1).
+    pub fn run(ext: &ExtProj, cell: &ViewCell, candidates: Option<&[u32]>) -> Sweep {
+        let ids = ext.occluders.relevant_among(&cell.aabb(), candidates);
         let reach = cell.aabb();
         let reach = Aabb3::new(
             reach.min - DVec3::splat(MAX_REACH_M),
             reach.max + DVec3::splat(MAX_REACH_M),
         );
-        let tri_ids = ext.occluders.triangles_in(&reach);
+        let tri_ids = ext.occluders.triangles_in(&reach, candidates);
         let mut planes = Vec::new();
         for dir in Direction::ALL {
             planes.extend(sweep_direction(ext, cell, dir, &ids, &tri_ids));
@@ -303,12 +305,11 @@ fn sweep_direction(
     let mut out: Vec<SweepPlane> = Vec::with_capacity(xs.len());
     for &x in &xs {
         let plane = Plane::new(dir, &lc, x, n, ext.params.extension);
-        let ps = plane.pixel_size();
         let mut b = CoverageBuilder::new(n);
         for o in &occ {
             // Every occluder in front of the plane is projected unless its Projection
             // is provably void (most leaves far in front of it).
-            if o.far <= x && !void_projection(o, &lc, cell_size, x, ps) {
+            if o.far <= x && !void_projection(o, &lc, cell_size, x) {
                 if let Some((poly, d)) = extended_projection(&o.vertices, &lc, x) {
                     let px: Vec<DVec2> = poly.iter().map(|q| plane.to_px(*q)).collect();
                     b.add_convex(&px, depth_up(d).min(0.0));
@@ -390,15 +391,15 @@ pub fn ground_black(plane: &Plane, black: &mut [bool]) {
     }
 }
 
-/// A cheap proof that an occluder's Projection on `w = x` covers no full pixel: its
-/// views from two cell corners are shifted by more than its projected width, or its
-/// projected width is below a pixel (skipping an occluder is always conservative).
-fn void_projection(o: &LocalOccluder, lc: &LocalBox, cell: DVec2, x: f64, ps: DVec2) -> bool {
+/// A cheap proof that an occluder's Projection on `w = x` is void: its views from two
+/// cell corners are shifted by more than its projected width, so they do not overlap
+/// (skipping an occluder is always conservative). A Projection thinner than a pixel is
+/// not skipped: the union-aware coverage fuses it with its neighbours (NOTES §2).
+fn void_projection(o: &LocalOccluder, lc: &LocalBox, cell: DVec2, x: f64) -> bool {
     let near = (o.near - lc.max.x).max(1e-9);
     let scale = (x - lc.min.x) / near; // largest magnification of a view
     let width = o.ext * scale;
     let shift = cell * ((x - o.far) / (o.far - lc.min.x)).max(0.0);
-    let _ = ps;
     width.x <= shift.x || width.y <= shift.y
 }
 
