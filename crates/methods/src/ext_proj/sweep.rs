@@ -40,7 +40,7 @@
 //! must lie behind all of them.
 
 use super::depth_map::{
-    depth_down, depth_up, pixel_range, CoverageBuilder, DepthMap, OcclusionMap,
+    clipped_pixel_range, depth_down, depth_up, pixel_range, CoverageBuilder, DepthMap, OcclusionMap,
 };
 use super::planes::{Direction, LocalBox, Plane};
 use super::projection::{extended_projection, FACE_CLEARANCE_M};
@@ -105,6 +105,21 @@ impl Sweep {
                 sp.depth
                     .all_below(r[0], r[1], r[2], r[3], depth_down(depth))
             }
+        })
+    }
+
+    /// Whether the Projection of the box meets no black pixel on any sweep plane
+    /// (§6.1 "fully visible"; see [`super::PlaneMap::touches_nothing`]).
+    pub fn touches_nothing(&self, b: &Aabb3, improved: bool) -> bool {
+        self.planes.iter().all(|sp| {
+            let occ = sp.plane.dir.box_to_local(b.min, b.max);
+            [false, improved].iter().all(|&imp| {
+                let Some((rect, _)) = occludee_projection(&sp.cell, &occ, sp.plane.x, imp) else {
+                    return false;
+                };
+                let (lo, hi) = (sp.plane.to_px(rect.min), sp.plane.to_px(rect.max));
+                clipped_pixel_range(lo, hi, sp.umbra.n).is_none_or(|r| !sp.umbra.any_black(r))
+            })
         })
     }
 
