@@ -43,7 +43,7 @@ use super::depth_map::{
     clipped_pixel_range, depth_down, depth_up, pixel_range, CoverageBuilder, DepthMap, OcclusionMap,
 };
 use super::planes::{Direction, LocalBox, Plane};
-use super::projection::{extended_projection, FACE_CLEARANCE_M};
+use super::projection::{extended_projection, split_at, FACE_CLEARANCE_M};
 use super::{occludee::occludee_projection, ExtProj};
 use sightline_geom::{Aabb3, DVec2, DVec3, ViewCell};
 
@@ -328,6 +328,16 @@ fn sweep_direction(
                 if let Some((poly, d)) = extended_projection(&o.vertices, &lc, x) {
                     let px: Vec<DVec2> = poly.iter().map(|q| plane.to_px(*q)).collect();
                     b.add_convex(&px, depth_up(d).min(0.0));
+                }
+            } else if o.near < x && x < o.far {
+                // An occluder crossing the plane: its part in front (a subset, on one
+                // side of the plane, see `projection::plane_safe_projections`) lies against the
+                // plane, where Projections are largest — the leaves that fuse best on
+                // this plane. Every sight line to its Projection is blocked at w ≤ x.
+                let (front, _) = split_at(&o.vertices, x);
+                if let Some((poly, _)) = extended_projection(&front, &lc, x) {
+                    let px: Vec<DVec2> = poly.iter().map(|q| plane.to_px(*q)).collect();
+                    b.add_convex(&px, 0.0);
                 }
             }
             if let Some(pi) = o.piece {
