@@ -3,9 +3,10 @@
 //! `cargo run --release -p sightline-methods --example ext_proj_cities -- SCENE [SIZE] [COUNT] [CACHE]`
 //!
 //! Cells: `check::street_cells` (SIZE m, default 25, z 1.5..2, COUNT default 50). The
-//! ground truth (default `TruthOptions`) and erosion's PVS are computed once and cached
-//! in `CACHE` (default `/tmp/ext_proj_cities_<scene>_<size>_<count>.txt`), so variants of
-//! ext-proj can be compared quickly. Prints, per variant: missed, `over` = |PVS| / |VS|
+//! ground truth (default `TruthOptions`) is computed once and cached in `CACHE`
+//! (default `/tmp/ext_proj_cities_<scene>_<size>_<count>.txt`), so variants of ext-proj
+//! can be compared quickly; erosion runs on the same cells every time, timed as
+//! ext-proj is. Prints, for erosion and per variant: missed, `over` = |PVS| / |VS|
 //! median and p90, mean hidden %, median ms/cell (single thread, preparation excluded)
 //! and the mean PVS size. `EXTPROJ_VARIANTS` selects the variants (comma-separated,
 //! see [`variant`]: `default`, or settings such as `improved=0` or `res=512+sa=0`);
@@ -24,11 +25,6 @@ use std::collections::BTreeSet;
 use std::sync::Arc;
 use std::time::Instant;
 
-struct Cached {
-    truth: Vec<Vec<u32>>,
-    erosion: Vec<Vec<u32>>,
-}
-
 fn ids(s: &str) -> Vec<u32> {
     s.split_whitespace()
         .filter_map(|t| t.parse().ok())
@@ -42,16 +38,10 @@ fn join(v: &[u32]) -> String {
         .join(" ")
 }
 
-fn read_cache(path: &str, n: usize) -> Option<Cached> {
+fn read_cache(path: &str, n: usize) -> Option<Vec<Vec<u32>>> {
     let text = std::fs::read_to_string(path).ok()?;
     let lines: Vec<&str> = text.lines().collect();
-    if lines.len() != 2 * n {
-        return None;
-    }
-    Some(Cached {
-        truth: lines[..n].iter().map(|l| ids(l)).collect(),
-        erosion: lines[n..].iter().map(|l| ids(l)).collect(),
-    })
+    (lines.len() == n).then(|| lines.iter().map(|l| ids(l)).collect())
 }
 
 fn quantile(v: &[f64], q: f64) -> f64 {
@@ -109,7 +99,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let cells: Vec<ViewCell> = street_cells(&scene, size, (1.5, 2.0), count);
     let n_obj = scene.objects.len();
     eprintln!("{stem}: {n_obj} objects, {} cells of {size} m", cells.len());
-    let cached = match read_cache(&cache, cells.len()) {
+    let truth = match read_cache(&cache, cells.len()) {
         Some(c) => c,
         None => {
             let t = Instant::now();
@@ -118,26 +108,34 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .map(|c| ground_truth(&scene, c, &TruthOptions::default()).visible)
                 .collect();
             eprintln!("truth: {:.1} s", t.elapsed().as_secs_f64());
-            let ero = create("erosion", scene.clone(), &MethodOptions::default())?;
-            let erosion: Vec<Vec<u32>> = cells
-                .iter()
-                .map(|c| ero.pvs(c).unwrap_or_else(|_| (0..n_obj as u32).collect()))
-                .collect();
             let mut text = String::new();
-            for v in truth.iter().chain(&erosion) {
+            for v in &truth {
                 text.push_str(&join(v));
                 text.push('\n');
             }
             std::fs::write(&cache, text)?;
-            Cached { truth, erosion }
+            truth
         }
     };
+    // Erosion on the same cells, timed the same way as ext-proj (single thread,
+    // preparation excluded).
+    let ero = create("erosion", scene.clone(), &MethodOptions::default())?;
+    let mut erosion_ms = Vec::new();
+    let erosion: Vec<Vec<u32>> = cells
+        .iter()
+        .map(|c| {
+            let t = Instant::now();
+            let p = ero.pvs(c).unwrap_or_else(|_| (0..n_obj as u32).collect());
+            erosion_ms.push(t.elapsed().as_secs_f64() * 1e3);
+            p
+        })
+        .collect();
     let over = |pvs: &[Vec<u32>]| -> (usize, Vec<f64>, f64, f64) {
         let mut missed = 0;
         let mut ratios = Vec::new();
         let mut hidden = 0.0;
         let mut mean = 0.0;
-        for (p, t) in pvs.iter().zip(&cached.truth) {
+        for (p, t) in pvs.iter().zip(&truth) {
             let ps: BTreeSet<u32> = p.iter().copied().collect();
             missed += t.iter().filter(|i| !ps.contains(i)).count();
             ratios.push(p.len() as f64 / t.len().max(1) as f64);
@@ -147,17 +145,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let k = pvs.len().max(1) as f64;
         (missed, ratios, 100.0 * hidden / k, mean / k)
     };
-    let print = |name: &str, pvs: &[Vec<u32>], ms: Option<f64>| {
+    let print = |name: &str, pvs: &[Vec<u32>], ms: f64| {
         let (missed, r, hidden, mean) = over(pvs);
         println!(
-            "{stem} {name:>10}: cells {} missed {missed} over median {:.2} p90 {:.2} hidden {hidden:.1} % mean PVS {mean:.1} ms/cell {}",
+            "{stem} {name:>10}: cells {} missed {missed} over median {:.2} p90 {:.2} hidden {hidden:.1} % mean PVS {mean:.1} ms/cell {:.0}",
             pvs.len(),
             quantile(&r, 0.5),
             quantile(&r, 0.9),
-            ms.map_or("-".to_string(), |m| format!("{m:.0}")),
+            ms,
         );
     };
-    print("erosion", &cached.erosion, None);
+    print("erosion", &erosion, quantile(&erosion_ms, 0.5));
     let variants = std::env::var("EXTPROJ_VARIANTS").unwrap_or_else(|_| "default".into());
     for name in variants.split(',') {
         let Some(params) = variant(name.trim()) else {
@@ -172,10 +170,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             pvs.push(m.pvs(c).unwrap_or_else(|_| (0..n_obj as u32).collect()));
             ms.push(t.elapsed().as_secs_f64() * 1e3);
         }
-        print(name.trim(), &pvs, Some(quantile(&ms, 0.5)));
+        print(name.trim(), &pvs, quantile(&ms, 0.5));
         if std::env::var("EXTPROJ_DIAG").is_ok_and(|v| v == "2") {
             let (mut off, mut near, mut far, mut total) = (0usize, 0usize, 0usize, 0usize);
-            for (k, (p, e)) in pvs.iter().zip(&cached.erosion).enumerate() {
+            for (k, (p, e)) in pvs.iter().zip(&erosion).enumerate() {
                 let es: BTreeSet<u32> = e.iter().copied().collect();
                 let maps = m.plane_maps(&cells[k]);
                 for &id in p.iter().filter(|i| !es.contains(i)) {
@@ -217,13 +215,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             );
         }
         if std::env::var("EXTPROJ_DIAG").is_ok_and(|v| v == "1") {
-            for (k, (p, e)) in pvs.iter().zip(&cached.erosion).enumerate() {
+            for (k, (p, e)) in pvs.iter().zip(&erosion).enumerate() {
                 let es: BTreeSet<u32> = e.iter().copied().collect();
                 let extra: Vec<u32> = p.iter().copied().filter(|i| !es.contains(i)).collect();
                 println!(
                     "  cell {k} {} |VS| {} |erosion| {} |ext| {} kept-but-erosion-hidden {:?}",
                     cells[k],
-                    cached.truth[k].len(),
+                    truth[k].len(),
                     e.len(),
                     p.len(),
                     extra

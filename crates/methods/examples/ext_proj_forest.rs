@@ -12,8 +12,9 @@
 //!
 //! Environment: `RES=512` depth-map resolution (the CLI's default with `--sweep`);
 //! `KERNEL`, `START`, `REACH` the sweep's kernel size (px), first-plane distance and
-//! least reach (m); `CELL=x0,y0,z0,x1,y1,z1` one given cell; `SWEEP_DEBUG=DIR` writes the first
-//! cell's sweep occlusion maps as PGM images to DIR; `LEAVES`, `LEAF=a:b`, `CROWN=a:b`,
+//! least reach (m); `EXT` the extension of the planes for the corner directions;
+//! `CELL=x0,y0,z0,x1,y1,z1` one given cell; `SWEEP_DEBUG=DIR` writes the first cell's
+//! sweep occlusion maps as PGM images to DIR; `LEAVES`, `LEAF=a:b`, `CROWN=a:b`,
 //! `ASPECT=a:b`, `TRUNK=a:b`, `LIFT` override the dense preset (for tuning).
 
 use rayon::prelude::*;
@@ -131,6 +132,10 @@ fn main() {
             .ok()
             .and_then(|s| s.parse().ok())
             .unwrap_or(Params::default().sweep_reach_m),
+        extension: std::env::var("EXT")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(Params::default().extension),
         ..Params::default()
     };
     let mut variants: Vec<(String, Params)> = vec![("plain".into(), base.clone())];
@@ -166,7 +171,7 @@ fn main() {
         }
         if let (Some(dir), true) = (std::env::var_os("SWEEP_DEBUG"), m.params.sweep) {
             let dir = std::path::PathBuf::from(dir);
-            let sw = sightline_methods::ext_proj::sweep::Sweep::run(&m, &cells[0]);
+            let sw = sightline_methods::ext_proj::sweep::Sweep::run(&m, &cells[0], None);
             for (k, sp) in sw.planes.iter().enumerate() {
                 let n = sp.umbra.n;
                 let mut img = format!("P5 {n} {n} 255\n").into_bytes();

@@ -204,3 +204,45 @@ fn improved_projection_hides_an_occludee_in_front_of_the_plane() {
     assert_eq!(p, vec![0]);
     assert_conservative(&scene, &c, &p);
 }
+
+/// Adaptive preprocess (§6.1): a 60 m cell in front of a long high wall is split into
+/// halves, which cull only the parent's PVS and drop the occluders hidden from the
+/// parent — here a second wall behind the first, whose pieces are made only of a
+/// hidden object. The union of the halves' PVSs is conservative and no larger than the
+/// parent's.
+#[test]
+fn adaptive_halves_cull_the_parents_pvs_without_its_hidden_occluders() {
+    let scene = Arc::new(Scene::from_objects(vec![
+        Object::rect_block(-200.0, 20.0, 260.0, 22.0, 20.0), // 0 front wall
+        Object::rect_block(10.0, 40.0, 50.0, 42.0, 15.0),    // 1 second wall, hidden
+        Object::rect_block(20.0, 60.0, 40.0, 70.0, 10.0),    // 2 behind both
+        Object::rect_block(20.0, -40.0, 40.0, -30.0, 10.0),  // 3 in the open
+    ]));
+    let c = cell("0,0,1.5,60,10,2");
+    let flat = Params {
+        adaptive_budget: None,
+        ..Params::default()
+    };
+    let ext = ExtProj::new(scene.clone(), flat);
+    let parent = ext.pvs_among(&c, &[0, 1, 2, 3]);
+    assert_eq!(parent, vec![0, 3], "both walls' shadows hide 1 and 2");
+    // The second wall's pieces are made of object 1 only: the halves drop them.
+    let all = ext.occluders.relevant(&c.aabb());
+    let kept = ext.occluders.relevant_among(&c.aabb(), Some(&parent));
+    assert!(kept.len() < all.len(), "{} of {}", kept.len(), all.len());
+    assert!(kept
+        .iter()
+        .all(|&i| ext.occluders.pieces[i as usize].made_of_any(&parent)));
+    let adaptive = pvs(
+        &scene,
+        &c,
+        Params {
+            adaptive_budget: Some(0),
+            adaptive_min_m: 25.0,
+            ..Params::default()
+        },
+    );
+    assert!(adaptive.iter().all(|i| parent.contains(i)), "{adaptive:?}");
+    assert!(adaptive.contains(&0) && adaptive.contains(&3));
+    assert_conservative(&scene, &c, &adaptive);
+}

@@ -123,7 +123,7 @@ fn small_forest_sweep() -> (ExtProj, ViewCell) {
 #[test]
 fn leaves_fill_the_occlusion_maps() {
     let (e, c) = small_forest_sweep();
-    let sw = sightline_methods::ext_proj::sweep::Sweep::run(&e, &c);
+    let sw = sightline_methods::ext_proj::sweep::Sweep::run(&e, &c, None);
     let best = sw.planes.iter().map(|p| p.umbra.count()).max().unwrap_or(0);
     assert!(best > 5000, "{best}");
 }
@@ -189,7 +189,7 @@ fn sweep_culls_the_dense_generated_forest_without_missing() {
 #[test]
 fn improved_projection_on_sweep_planes() {
     let (e, c) = small_forest_sweep();
-    let sw = sightline_methods::ext_proj::sweep::Sweep::run(&e, &c);
+    let sw = sightline_methods::ext_proj::sweep::Sweep::run(&e, &c, None);
     let mut hidden = 0;
     for i in 0..40 {
         for j in 0..30 {
@@ -203,4 +203,61 @@ fn improved_projection_on_sweep_planes() {
         }
     }
     assert!(hidden > 0, "the sweep hides some probes");
+}
+
+/// A leaf crossing a sweep plane projects its part in front of the plane (§5.2: the
+/// occluders in front of the plane): a slanted 10 m board whose top leans over the
+/// first plane (x = 3) blackens pixels there, where before it was left to later planes.
+#[test]
+fn leaves_crossing_a_plane_project_their_front_part() {
+    let mesh_of = |tris: &[[DVec3; 3]]| {
+        let mut m = Mesh::default();
+        for t in tris {
+            let base = m.vertices.len() as u32;
+            m.vertices.extend(t);
+            m.triangles.push([base, base + 1, base + 2]);
+        }
+        Object::mesh(None, m, vec![], vec![])
+    };
+    let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    // A small leaf just beyond 2.5 m sets the first plane at x = 3 (start 2 m).
+    let leaf = mesh_of(&[[v(2.5, 0.4, 1.7), v(2.6, 0.6, 1.7), v(2.55, 0.5, 1.8)]]);
+    // The board runs from x = 4 on the ground to x = 2.8 at z = 4: its part z ≥ 3.33
+    // lies in front of x = 3.
+    let board = mesh_of(&[
+        [v(4.0, -5.0, 0.0), v(4.0, 5.0, 0.0), v(2.8, 5.0, 4.0)],
+        [v(4.0, -5.0, 0.0), v(2.8, 5.0, 4.0), v(2.8, -5.0, 4.0)],
+    ]);
+    let c: ViewCell = "0,0,1.5,1,1,2".parse().expect("cell");
+    let black_above_ground = |objects: Vec<Object>| {
+        let e = ExtProj::new(
+            Arc::new(Scene::from_objects(objects)),
+            Params {
+                sweep: true,
+                sweep_planes: 1,
+                resolution_px: 256,
+                adaptive_budget: None,
+                ..Params::default()
+            },
+        );
+        let sw = sightline_methods::ext_proj::sweep::Sweep::run(&e, &c, None);
+        let plane = sw
+            .planes
+            .iter()
+            .find(|p| p.plane.dir == sightline_methods::ext_proj::planes::Direction::PosX)
+            .expect("a +x plane");
+        assert!((plane.plane.x - 3.0).abs() < 0.01, "{}", plane.plane.x);
+        let n = plane.umbra.n;
+        (0..n * n)
+            .filter(|&k| {
+                let p = plane
+                    .plane
+                    .from_px(DVec2::new((k % n) as f64, (k / n) as f64));
+                plane.umbra.black[k] && p.y > 0.0
+            })
+            .count()
+    };
+    let alone = black_above_ground(vec![leaf.clone()]);
+    let with_board = black_above_ground(vec![leaf, board]);
+    assert!(with_board > alone + 1000, "{alone} → {with_board}");
 }

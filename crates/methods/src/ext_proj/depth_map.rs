@@ -244,11 +244,14 @@ impl Band {
 pub struct DepthMap {
     pub n: usize,
     levels: Vec<(usize, Vec<f32>)>,
+    /// The covered (finite-depth) pixels, for the "fully visible" test of §6.1.
+    covered: SummedArea,
 }
 
 impl DepthMap {
     /// `n` must be a power of two.
     pub fn new(n: usize, depth: Vec<f32>) -> Self {
+        let covered = SummedArea::new(n, |k| depth[k].is_finite());
         let mut levels: Vec<(usize, Vec<f32>)> = Vec::new();
         let mut cur = (n, depth);
         while cur.0 > 1 {
@@ -267,7 +270,7 @@ impl DepthMap {
             levels.push(std::mem::replace(&mut cur, (h, next)));
         }
         levels.push(cur);
-        DepthMap { n, levels }
+        DepthMap { n, levels, covered }
     }
 
     /// Depth of pixel `(i, j)`.
@@ -277,7 +280,12 @@ impl DepthMap {
 
     /// Number of covered pixels.
     pub fn covered(&self) -> usize {
-        self.levels[0].1.iter().filter(|d| d.is_finite()).count()
+        self.covered.count()
+    }
+
+    /// Whether some pixel of the inclusive range is covered.
+    pub fn any_covered(&self, r: [usize; 4]) -> bool {
+        self.covered.count_in(r) > 0
     }
 
     /// Whether every pixel of the inclusive range `[i0, i1] × [j0, j1]` has a depth
@@ -330,41 +338,81 @@ pub fn pixel_range(min: DVec2, max: DVec2, n: usize) -> Option<[usize; 4]> {
     Some([i0.min(i1), j0.min(j1), i1, j1])
 }
 
+/// A summed-area table of a binary `n × n` map: the number of set pixels in any
+/// rectangle in O(1).
+#[derive(Clone)]
+pub struct SummedArea {
+    n: usize,
+    sat: Vec<u32>,
+}
+
+impl SummedArea {
+    pub fn new(n: usize, set: impl Fn(usize) -> bool) -> Self {
+        let w = n + 1;
+        let mut sat = vec![0u32; w * w];
+        for j in 0..n {
+            let mut row = 0u32;
+            for i in 0..n {
+                row += set(j * n + i) as u32;
+                sat[(j + 1) * w + i + 1] = sat[j * w + i + 1] + row;
+            }
+        }
+        SummedArea { n, sat }
+    }
+
+    /// Set pixels in the inclusive range `[i0, i1] × [j0, j1]`.
+    pub fn count_in(&self, r: [usize; 4]) -> usize {
+        let w = self.n + 1;
+        let [i0, j0, i1, j1] = r;
+        (self.sat[(j1 + 1) * w + i1 + 1] + self.sat[j0 * w + i0]
+            - self.sat[j0 * w + i1 + 1]
+            - self.sat[(j1 + 1) * w + i0]) as usize
+    }
+
+    /// Set pixels in the whole map.
+    pub fn count(&self) -> usize {
+        self.sat[(self.n + 1) * (self.n + 1) - 1] as usize
+    }
+}
+
+/// The pixels a closed rectangle (continuous pixel coordinates) touches, clipped to
+/// the map, or `None` when it misses the map.
+pub fn clipped_pixel_range(min: DVec2, max: DVec2, n: usize) -> Option<[usize; 4]> {
+    let nf = n as f64;
+    if !(max.x >= 0.0 && max.y >= 0.0 && min.x <= nf && min.y <= nf) {
+        return None;
+    }
+    pixel_range(min.max(DVec2::ZERO), max.min(DVec2::splat(nf)), n)
+}
+
 /// A binary occlusion map with a summed-area table, for the occlusion sweep (§5):
 /// "we only keep the black pixels".
 #[derive(Clone)]
 pub struct OcclusionMap {
     pub n: usize,
     pub black: Vec<bool>,
-    sat: Vec<u32>,
+    sat: SummedArea,
 }
 
 impl OcclusionMap {
     pub fn new(n: usize, black: Vec<bool>) -> Self {
-        let w = n + 1;
-        let mut sat = vec![0u32; w * w];
-        for j in 0..n {
-            let mut row = 0u32;
-            for i in 0..n {
-                row += black[j * n + i] as u32;
-                sat[(j + 1) * w + i + 1] = sat[j * w + i + 1] + row;
-            }
-        }
+        let sat = SummedArea::new(n, |k| black[k]);
         OcclusionMap { n, black, sat }
     }
 
     /// Whether every pixel of the inclusive range is black.
     pub fn all_black(&self, r: [usize; 4]) -> bool {
-        let w = self.n + 1;
         let [i0, j0, i1, j1] = r;
-        let s = self.sat[(j1 + 1) * w + i1 + 1] + self.sat[j0 * w + i0]
-            - self.sat[j0 * w + i1 + 1]
-            - self.sat[(j1 + 1) * w + i0];
-        s as usize == (i1 + 1 - i0) * (j1 + 1 - j0)
+        self.sat.count_in(r) == (i1 + 1 - i0) * (j1 + 1 - j0)
+    }
+
+    /// Whether some pixel of the inclusive range is black.
+    pub fn any_black(&self, r: [usize; 4]) -> bool {
+        self.sat.count_in(r) > 0
     }
 
     pub fn count(&self) -> usize {
-        self.sat[(self.n + 1) * (self.n + 1) - 1] as usize
+        self.sat.count()
     }
 }
 
@@ -524,6 +572,26 @@ mod tests {
         let m = OcclusionMap::new(4, black);
         assert!(m.all_black([1, 1, 3, 2]));
         assert!(!m.all_black([0, 1, 3, 2]));
+        assert!(m.any_black([0, 0, 1, 1]) && !m.any_black([0, 0, 3, 0]));
         assert_eq!(m.count(), 6);
+    }
+
+    #[test]
+    fn clipped_ranges_and_covered_pixels() {
+        let n = 8;
+        assert_eq!(
+            clipped_pixel_range(DVec2::new(-3.0, 2.5), DVec2::new(2.5, 20.0), n),
+            Some([0, 2, 2, 7])
+        );
+        assert_eq!(
+            clipped_pixel_range(DVec2::new(9.0, 0.0), DVec2::new(12.0, 4.0), n),
+            None
+        );
+        let mut depth = vec![f32::INFINITY; n * n];
+        depth[3 * n + 5] = 1.0;
+        let m = DepthMap::new(n, depth);
+        assert!(m.any_covered([5, 3, 5, 3]) && m.any_covered([0, 0, 7, 7]));
+        assert!(!m.any_covered([0, 0, 4, 7]) && !m.any_covered([5, 4, 7, 7]));
+        assert_eq!(m.covered(), 1);
     }
 }

@@ -18,7 +18,9 @@
 //!    drawn with union-aware inner coverage into an extended depth map and its
 //!    max pyramid ([`depth_map`]);
 //! 4. occludee boxes projected with separating / supporting lines, or the improved
-//!    projection of §4 ([`occludee`]), tested hierarchically against the pyramid;
+//!    projection of §4 ([`occludee`]), tested hierarchically against the pyramid:
+//!    through a box hierarchy over the objects that stops at hidden and at fully
+//!    visible nodes ([`hierarchy`]), then within each object by splitting its boxes;
 //! 5. with `sweep`, the occlusion sweep of §5 ([`sweep`]): successive planes, the
 //!    previous occlusion map re-projected (eroded by the inverse image of the
 //!    equivalent planar cell) and new occluders — including every mesh triangle, the
@@ -35,6 +37,7 @@
 pub mod adaptive;
 pub mod depth_map;
 pub mod experiments;
+pub mod hierarchy;
 pub mod occludee;
 pub mod occluders;
 pub mod planes;
@@ -42,7 +45,10 @@ pub mod projection;
 pub mod sweep;
 
 use crate::{MethodError, MethodOptions, VisibilityMethod};
-use depth_map::{depth_down, depth_up, pixel_range, CoverageBuilder, DepthMap};
+use depth_map::{
+    clipped_pixel_range, depth_down, depth_up, pixel_range, CoverageBuilder, DepthMap,
+};
+use hierarchy::{Hierarchy, Verdict};
 use occludee::occludee_projection;
 use occluders::OccluderSet;
 use planes::{candidate_positions, Direction, LocalBox, Plane};
@@ -268,6 +274,21 @@ impl PlaneMap {
             .all_below(r[0], r[1], r[2], r[3], depth_down(near - x))
     }
 
+    /// Whether the Projection of the box (world) meets no occluder Projection on this
+    /// plane (§6.1 "fully visible"): its rectangles — standard and, with `improved`,
+    /// improved — clipped to the map touch no covered pixel. `false` when the box is
+    /// not beyond the cell's far face (its views are unbounded).
+    pub fn touches_nothing(&self, b: &Aabb3, improved: bool) -> bool {
+        let occ = self.plane.dir.box_to_local(b.min, b.max);
+        [false, improved].iter().all(|&imp| {
+            let Some((rect, _)) = occludee_projection(&self.cell, &occ, self.plane.x, imp) else {
+                return false;
+            };
+            let (lo, hi) = (self.plane.to_px(rect.min), self.plane.to_px(rect.max));
+            clipped_pixel_range(lo, hi, self.map.n).is_none_or(|r| !self.map.any_covered(r))
+        })
+    }
+
     /// Whether the occludee box (in this plane's local frame) is hidden on this plane.
     pub fn hides_local(&self, occ: &LocalBox, improved: bool) -> bool {
         let Some((rect, depth)) = occludee_projection(&self.cell, occ, self.plane.x, improved)
@@ -455,10 +476,21 @@ impl ExtProj {
         self.plane_maps_for(cell, &all)
     }
 
+    /// The objects of `candidates` (sorted ids) as an occluder filter: `None` when
+    /// they are all the scene's objects.
+    fn occluder_filter<'a>(&self, candidates: &'a [u32]) -> Option<&'a [u32]> {
+        (candidates.len() < self.scene.objects.len()).then_some(candidates)
+    }
+
     /// The depth-mapped planes of `cell` (§6.1), chosen to hide the occludees of
-    /// `candidates` (object ids).
+    /// `candidates` (sorted object ids: the objects not yet known hidden from `cell`).
+    /// Occluders made only of other objects are left out: they are hidden from a
+    /// parent cell, hence from `cell` (§6.1, "we also use the PVS of the parent cell to
+    /// cull hidden occluders"), and leaving occluders out is always conservative.
     pub fn plane_maps_for(&self, cell: &ViewCell, candidates: &[u32]) -> Vec<PlaneMap> {
-        let ids = self.occluders.relevant(&cell.aabb());
+        let ids = self
+            .occluders
+            .relevant_among(&cell.aabb(), self.occluder_filter(candidates));
         let mut maps = Vec::new();
         for dir in Direction::ALL {
             let lc = dir.box_to_local(cell.min, cell.max);
@@ -521,26 +553,45 @@ impl ExtProj {
             && self.box_hidden(&hi, maps, extra, splits - 1)
     }
 
-    /// PVS of `cell` restricted to `candidates` (sorted object ids).
+    /// PVS of `cell` restricted to `candidates` (sorted object ids: all the objects,
+    /// or the PVS of a parent cell — the other objects, hidden, do not occlude either).
     pub fn pvs_among(&self, cell: &ViewCell, candidates: &[u32]) -> Vec<u32> {
         let maps = self.plane_maps_for(cell, candidates);
         let sweep = if self.params.sweep {
-            sweep::Sweep::run(self, cell)
+            sweep::Sweep::run(self, cell, self.occluder_filter(candidates))
         } else {
             sweep::Sweep::empty()
         };
-        let extra = |b: &Aabb3| sweep.hides(b, self.params.improved);
-        candidates
-            .iter()
-            .copied()
-            .filter(|&id| {
-                let (boxes, hulls) = (&self.boxes[id as usize], &self.hulls[id as usize]);
-                !boxes.iter().zip(hulls).all(|(b, h)| {
-                    maps.iter().any(|m| m.hides_points(h, self.params.improved))
-                        || self.box_hidden(b, &maps, &extra, self.params.occludee_splits)
-                })
-            })
-            .collect()
+        let improved = self.params.improved;
+        let extra = |b: &Aabb3| sweep.hides(b, improved);
+        let hierarchy = Hierarchy::build(candidates, |id| {
+            let boxes = &self.boxes[id as usize];
+            boxes.iter().skip(1).fold(boxes[0], |acc, b| acc.union(*b))
+        });
+        hierarchy.visible(
+            |b| {
+                if maps.iter().any(|m| m.hides(b, improved)) || extra(b) {
+                    Verdict::Hidden
+                } else if maps.iter().all(|m| m.touches_nothing(b, improved))
+                    && sweep.touches_nothing(b, improved)
+                {
+                    Verdict::FullyVisible
+                } else {
+                    Verdict::Unknown
+                }
+            },
+            |id| !self.object_hidden(id, &maps, &extra),
+        )
+    }
+
+    /// Whether every occludee box of object `id` is hidden on some plane: by its outer
+    /// prism's hull, or by the box itself or its halves ([`ExtProj::box_hidden`]).
+    fn object_hidden(&self, id: u32, maps: &[PlaneMap], extra: &dyn Fn(&Aabb3) -> bool) -> bool {
+        let (boxes, hulls) = (&self.boxes[id as usize], &self.hulls[id as usize]);
+        boxes.iter().zip(hulls).all(|(b, h)| {
+            maps.iter().any(|m| m.hides_points(h, self.params.improved))
+                || self.box_hidden(b, maps, extra, self.params.occludee_splits)
+        })
     }
 }
 
@@ -656,6 +707,44 @@ mod tests {
             }
         }
         assert!(agree > 0);
+    }
+
+    /// The occludee hierarchy (§6.1) stops at hidden and fully visible nodes without
+    /// changing the PVS: on a grid of blocks of mixed heights, from cells in several
+    /// streets, it equals the object-by-object test on the same planes.
+    #[test]
+    fn hierarchy_gives_the_object_by_object_pvs() {
+        let mut objects = Vec::new();
+        for i in 0..8 {
+            for j in 0..8 {
+                let (x, y) = (30.0 * i as f64, 30.0 * j as f64);
+                let h = 6.0 + ((i * 7 + j * 3) % 5) as f64 * 6.0;
+                objects.push(Object::rect_block(x, y, x + 9.0, y + 18.0, h));
+                objects.push(Object::rect_block(x + 9.0, y, x + 18.0, y + 18.0, h * 0.5));
+            }
+        }
+        let scene = Arc::new(Scene::from_objects(objects));
+        let params = Params {
+            resolution_px: 128,
+            adaptive_budget: None,
+            ..Params::default()
+        };
+        let ext = ExtProj::new(scene.clone(), params);
+        let all: Vec<u32> = (0..scene.objects.len() as u32).collect();
+        let mut hidden = 0;
+        for (x, y) in [(20.0, 40.0), (81.0, 110.0), (140.0, 200.0), (200.0, 22.0)] {
+            let c =
+                ViewCell::new(DVec3::new(x, y, 1.5), DVec3::new(x + 8.0, y + 6.0, 2.0)).unwrap();
+            let maps = ext.plane_maps_for(&c, &all);
+            let flat: Vec<u32> = all
+                .iter()
+                .copied()
+                .filter(|&id| !ext.object_hidden(id, &maps, &|_| false))
+                .collect();
+            assert_eq!(ext.pvs_among(&c, &all), flat, "from {c}");
+            hidden += all.len() - flat.len();
+        }
+        assert!(hidden > 0);
     }
 
     /// A building rotated by 45° behind a wall is hidden by the test of its hull.

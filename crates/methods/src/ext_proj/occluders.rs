@@ -14,6 +14,9 @@
 //!   `√(area / threshold)`) is precomputed and stored in a spatial tree (the paper's
 //!   kd-tree; here an R-tree), which each cell queries with its own box.
 //! * Mesh triangles (leaves) are kept apart: only the occlusion sweep uses them (§5).
+//! * Each piece and triangle knows the objects it may be made of ([`Piece::sources`]),
+//!   so the adaptive recursion can drop the occluders hidden from the parent cell
+//!   (§6.1: "we also use the PVS of the parent cell to cull hidden occluders").
 
 use super::projection::{clip_halfplane, polygon_area, ConvexOccluder};
 use rstar::{primitives::GeomWithData, primitives::Rectangle, RTree, AABB};
@@ -44,6 +47,20 @@ pub struct Piece {
     /// front into pieces, some of them thin slivers whose own solid angle is tiny;
     /// leaving them out opens gaps in the fused front that hide nothing behind it.
     pub relevance: f64,
+    /// The objects the piece may be made of (sorted ids, a superset): every object
+    /// whose prism, cut at the piece's level, can contribute to its fused footprint,
+    /// or the mesh object of a triangle. A piece none of whose sources is in a
+    /// parent cell's PVS is hidden from it, and from every sub-cell (§6.1).
+    pub sources: Vec<u32>,
+}
+
+impl Piece {
+    /// Whether some object of the piece is among `candidates` (sorted ids).
+    pub fn made_of_any(&self, candidates: &[u32]) -> bool {
+        self.sources
+            .iter()
+            .any(|s| candidates.binary_search(s).is_ok())
+    }
 }
 
 type Entry = GeomWithData<Rectangle<[f64; 2]>, u32>;
@@ -64,32 +81,56 @@ impl OccluderSet {
         let mut pieces = Vec::new();
         // Ground-standing inner prisms, by height.
         let mut ground: Vec<(&Polygon, f64)> = Vec::new();
-        for o in &scene.objects {
+        let mut ground_ids: Vec<u32> = Vec::new();
+        for (id, o) in scene.objects.iter().enumerate() {
             for p in &o.inner {
                 if !(p.top > p.base) {
                     continue;
                 }
                 if p.base <= GROUND_M {
                     ground.push((&p.footprint, p.top));
+                    ground_ids.push(id as u32);
                 } else {
                     let whole = cross_section(&p.footprint, p.top - p.base);
                     for (poly, _) in convex_pieces(&p.footprint) {
-                        push_prism(&mut pieces, poly, p.base, p.top, whole);
+                        push_prism(&mut pieces, poly, p.base, p.top, whole, vec![id as u32]);
                     }
                 }
             }
         }
+        // Ground prisms by footprint box, to find the sources of the fused pieces: a
+        // fused piece lies in the union of the footprints of the prisms with
+        // `top ≥ level`, so each prism that contributes meets the piece's box.
+        let ground_tree: RTree<GeomWithData<Rectangle<[f64; 2]>, usize>> = RTree::bulk_load(
+            ground
+                .iter()
+                .enumerate()
+                .map(|(k, (f, _))| {
+                    let b = f.bbox();
+                    GeomWithData::new(Rectangle::from_corners(b.min.into(), b.max.into()), k)
+                })
+                .collect(),
+        );
         for (level, polys) in fused_levels(&ground) {
             for poly in polys {
                 let whole = cross_section(&poly, level);
                 for (piece, _) in convex_pieces(&poly) {
-                    push_prism(&mut pieces, piece, 0.0, level, whole);
+                    let b = sightline_geom::Aabb2::from_points(&piece);
+                    let env = AABB::from_corners(b.min.into(), b.max.into());
+                    let mut sources: Vec<u32> = ground_tree
+                        .locate_in_envelope_intersecting(env)
+                        .filter(|e| ground[e.data].1 >= level)
+                        .map(|e| ground_ids[e.data])
+                        .collect();
+                    sources.sort_unstable();
+                    sources.dedup();
+                    push_prism(&mut pieces, piece, 0.0, level, whole, sources);
                 }
             }
         }
         let tree = relevance_tree(&pieces, solid_angle);
         let mut triangles = Vec::new();
-        for o in &scene.objects {
+        for (id, o) in scene.objects.iter().enumerate() {
             if let Geometry::Mesh(m) = &o.geometry {
                 for t in &m.triangles {
                     let tri = m.triangle(t);
@@ -104,6 +145,7 @@ impl OccluderSet {
                         bounds: Aabb3::from_points(&tri),
                         area,
                         relevance: area,
+                        sources: vec![id as u32],
                     });
                 }
             }
@@ -120,27 +162,39 @@ impl OccluderSet {
 
     /// Pieces whose relevance region meets the cell's footprint (§6.1).
     pub fn relevant(&self, cell: &Aabb3) -> Vec<u32> {
-        let env = AABB::from_corners([cell.min.x, cell.min.y], [cell.max.x, cell.max.y]);
-        let mut v: Vec<u32> = self
-            .tree
-            .locate_in_envelope_intersecting(env)
-            .map(|e| e.data)
-            .collect();
-        v.sort_unstable();
-        v
+        self.relevant_among(cell, None)
     }
 
-    /// Mesh triangles whose footprint meets the box `area` (the sweep's reach).
-    pub fn triangles_in(&self, area: &Aabb3) -> Vec<u32> {
-        let env = AABB::from_corners([area.min.x, area.min.y], [area.max.x, area.max.y]);
-        let mut v: Vec<u32> = self
-            .tri_tree
-            .locate_in_envelope_intersecting(env)
-            .map(|e| e.data)
-            .collect();
-        v.sort_unstable();
-        v
+    /// [`OccluderSet::relevant`], keeping only the pieces made of some object of
+    /// `candidates` (sorted ids; `None` = all): the others are hidden from the cell
+    /// whose PVS `candidates` is (§6.1).
+    pub fn relevant_among(&self, cell: &Aabb3, candidates: Option<&[u32]>) -> Vec<u32> {
+        in_envelope(&self.tree, &self.pieces, cell, candidates)
     }
+
+    /// Mesh triangles whose footprint meets the box `area` (the sweep's reach) and
+    /// whose object is among `candidates` (sorted ids; `None` = all).
+    pub fn triangles_in(&self, area: &Aabb3, candidates: Option<&[u32]>) -> Vec<u32> {
+        in_envelope(&self.tri_tree, &self.triangles, area, candidates)
+    }
+}
+
+/// The entries of `tree` meeting the footprint of `area`, made of some object of
+/// `candidates` (all when `None`), sorted.
+fn in_envelope(
+    tree: &RTree<Entry>,
+    pieces: &[Piece],
+    area: &Aabb3,
+    candidates: Option<&[u32]>,
+) -> Vec<u32> {
+    let env = AABB::from_corners([area.min.x, area.min.y], [area.max.x, area.max.y]);
+    let mut v: Vec<u32> = tree
+        .locate_in_envelope_intersecting(env)
+        .map(|e| e.data)
+        .filter(|&i| candidates.is_none_or(|c| pieces[i as usize].made_of_any(c)))
+        .collect();
+    v.sort_unstable();
+    v
 }
 
 /// The rough largest cross-section (m²) of a prism of `height` over `footprint`.
@@ -148,7 +202,14 @@ fn cross_section(footprint: &Polygon, height: f64) -> f64 {
     (footprint.bbox().size().length() * height).max(footprint.area())
 }
 
-fn push_prism(pieces: &mut Vec<Piece>, footprint: Vec<DVec2>, base: f64, top: f64, whole: f64) {
+fn push_prism(
+    pieces: &mut Vec<Piece>,
+    footprint: Vec<DVec2>,
+    base: f64,
+    top: f64,
+    whole: f64,
+    sources: Vec<u32>,
+) {
     let area = polygon_area(&footprint);
     if footprint.len() < 3 || !(area > 0.0) {
         return;
@@ -160,6 +221,7 @@ fn push_prism(pieces: &mut Vec<Piece>, footprint: Vec<DVec2>, base: f64, top: f6
         bounds: Aabb3::new(b.min.extend(base), b.max.extend(top)),
         area: own,
         relevance: own.max(whole),
+        sources,
         occluder: ConvexOccluder::Prism {
             footprint,
             base,
@@ -465,5 +527,21 @@ mod tests {
         );
         assert!(set.pieces.iter().any(|p| p.bounds.max.z == 20.0));
         assert_eq!(set.relevant(&scene.bounds).len(), set.pieces.len());
+        // The pieces at level 10 are made of both buildings, those at 20 of the tall
+        // one only: with the tall one hidden (not a candidate) only level 10 is left.
+        for p in &set.pieces {
+            let want: &[u32] = if p.bounds.max.z == 10.0 {
+                &[0, 1]
+            } else {
+                &[0]
+            };
+            assert_eq!(p.sources, want, "{:?}", p.bounds);
+        }
+        let without_tall = set.relevant_among(&scene.bounds, Some(&[1]));
+        assert!(!without_tall.is_empty());
+        assert!(without_tall
+            .iter()
+            .all(|&i| set.pieces[i as usize].bounds.max.z == 10.0));
+        assert!(set.relevant_among(&scene.bounds, Some(&[])).is_empty());
     }
 }

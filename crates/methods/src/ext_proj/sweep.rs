@@ -40,10 +40,10 @@
 //! must lie behind all of them.
 
 use super::depth_map::{
-    depth_down, depth_up, pixel_range, CoverageBuilder, DepthMap, OcclusionMap,
+    clipped_pixel_range, depth_down, depth_up, pixel_range, CoverageBuilder, DepthMap, OcclusionMap,
 };
 use super::planes::{Direction, LocalBox, Plane};
-use super::projection::{extended_projection, FACE_CLEARANCE_M};
+use super::projection::{extended_projection, split_at, FACE_CLEARANCE_M};
 use super::{occludee::occludee_projection, ExtProj};
 use sightline_geom::{Aabb3, DVec2, DVec3, ViewCell};
 
@@ -108,15 +108,32 @@ impl Sweep {
         })
     }
 
-    /// Run the sweep in the six directions of `cell`.
-    pub fn run(ext: &ExtProj, cell: &ViewCell) -> Sweep {
-        let ids = ext.occluders.relevant(&cell.aabb());
+    /// Whether the Projection of the box meets no black pixel on any sweep plane
+    /// (§6.1 "fully visible"; see [`super::PlaneMap::touches_nothing`]).
+    pub fn touches_nothing(&self, b: &Aabb3, improved: bool) -> bool {
+        self.planes.iter().all(|sp| {
+            let occ = sp.plane.dir.box_to_local(b.min, b.max);
+            [false, improved].iter().all(|&imp| {
+                let Some((rect, _)) = occludee_projection(&sp.cell, &occ, sp.plane.x, imp) else {
+                    return false;
+                };
+                let (lo, hi) = (sp.plane.to_px(rect.min), sp.plane.to_px(rect.max));
+                clipped_pixel_range(lo, hi, sp.umbra.n).is_none_or(|r| !sp.umbra.any_black(r))
+            })
+        })
+    }
+
+    /// Run the sweep in the six directions of `cell`, with the occluders (prisms and
+    /// leaves) made of some object of `candidates` (sorted ids; `None` = all: the
+    /// others are hidden from a parent cell, §6.1).
+    pub fn run(ext: &ExtProj, cell: &ViewCell, candidates: Option<&[u32]>) -> Sweep {
+        let ids = ext.occluders.relevant_among(&cell.aabb(), candidates);
         let reach = cell.aabb();
         let reach = Aabb3::new(
             reach.min - DVec3::splat(MAX_REACH_M),
             reach.max + DVec3::splat(MAX_REACH_M),
         );
-        let tri_ids = ext.occluders.triangles_in(&reach);
+        let tri_ids = ext.occluders.triangles_in(&reach, candidates);
         let mut planes = Vec::new();
         for dir in Direction::ALL {
             planes.extend(sweep_direction(ext, cell, dir, &ids, &tri_ids));
@@ -303,15 +320,24 @@ fn sweep_direction(
     let mut out: Vec<SweepPlane> = Vec::with_capacity(xs.len());
     for &x in &xs {
         let plane = Plane::new(dir, &lc, x, n, ext.params.extension);
-        let ps = plane.pixel_size();
         let mut b = CoverageBuilder::new(n);
         for o in &occ {
             // Every occluder in front of the plane is projected unless its Projection
             // is provably void (most leaves far in front of it).
-            if o.far <= x && !void_projection(o, &lc, cell_size, x, ps) {
+            if o.far <= x && !void_projection(o, &lc, cell_size, x) {
                 if let Some((poly, d)) = extended_projection(&o.vertices, &lc, x) {
                     let px: Vec<DVec2> = poly.iter().map(|q| plane.to_px(*q)).collect();
                     b.add_convex(&px, depth_up(d).min(0.0));
+                }
+            } else if o.near < x && x < o.far {
+                // An occluder crossing the plane: its part in front (a subset, on one
+                // side of the plane, see `projection::plane_safe_projections`) lies against the
+                // plane, where Projections are largest — the leaves that fuse best on
+                // this plane. Every sight line to its Projection is blocked at w ≤ x.
+                let (front, _) = split_at(&o.vertices, x);
+                if let Some((poly, _)) = extended_projection(&front, &lc, x) {
+                    let px: Vec<DVec2> = poly.iter().map(|q| plane.to_px(*q)).collect();
+                    b.add_convex(&px, 0.0);
                 }
             }
             if let Some(pi) = o.piece {
@@ -390,15 +416,15 @@ pub fn ground_black(plane: &Plane, black: &mut [bool]) {
     }
 }
 
-/// A cheap proof that an occluder's Projection on `w = x` covers no full pixel: its
-/// views from two cell corners are shifted by more than its projected width, or its
-/// projected width is below a pixel (skipping an occluder is always conservative).
-fn void_projection(o: &LocalOccluder, lc: &LocalBox, cell: DVec2, x: f64, ps: DVec2) -> bool {
+/// A cheap proof that an occluder's Projection on `w = x` is void: its views from two
+/// cell corners are shifted by more than its projected width, so they do not overlap
+/// (skipping an occluder is always conservative). A Projection thinner than a pixel is
+/// not skipped: the union-aware coverage fuses it with its neighbours (NOTES §2).
+fn void_projection(o: &LocalOccluder, lc: &LocalBox, cell: DVec2, x: f64) -> bool {
     let near = (o.near - lc.max.x).max(1e-9);
     let scale = (x - lc.min.x) / near; // largest magnification of a view
     let width = o.ext * scale;
     let shift = cell * ((x - o.far) / (o.far - lc.min.x)).max(0.0);
-    let _ = ps;
     width.x <= shift.x || width.y <= shift.y
 }
 
