@@ -39,9 +39,14 @@ pub(crate) const PREAMBLE_FIXED: usize = 12;
 
 /// zstd level of the table sections and data blocks.
 const ZSTD_LEVEL: i32 = 19;
-/// A data block closes after this many cells or this many uncompressed bytes.
-const BLOCK_CELLS: usize = 64;
-const BLOCK_BYTES: usize = 64 * 1024;
+/// A data block closes after this many cells or this many uncompressed bytes. Large
+/// blocks let zstd find what the delta-PVS leaves: the sets of neighbouring cells that
+/// are not each other's reference still share whole streets. On a 900-cell block of the
+/// 150k metropolis (dual-ray, mean PVS 1,864 ids) 64 KiB blocks store 21.0 % of sorted
+/// `u32` lists, 256 KiB 13.3 %, 512 KiB 9.4 %, 1 MiB 7.4 %; a query that misses the
+/// block cache decompresses one block (≈ 0.5 ms at 512 KiB).
+const BLOCK_CELLS: usize = 4096;
+const BLOCK_BYTES: usize = 512 * 1024;
 /// Decoded sizes above this are treated as corruption, not allocated.
 pub(crate) const MAX_RAW_SECTION: u64 = 1 << 32;
 

@@ -16,8 +16,11 @@ use std::os::unix::fs::FileExt;
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 
-/// Decoded blocks kept for the next queries (a walk stays in a neighbourhood).
-const BLOCK_CACHE: usize = 16;
+/// Decoded blocks kept for the next queries, oldest dropped first, up to this many
+/// decoded bytes: a walk stays in a neighbourhood, and a server answering clients all
+/// over a city of 10,000 cells keeps every block of its file (≈ 35 MB decoded for the
+/// 150k metropolis).
+const BLOCK_CACHE_BYTES: usize = 64 << 20;
 
 enum Source {
     File { file: File, path: String },
@@ -284,8 +287,9 @@ impl PvsFile {
         }
         let raw = Arc::new(raw);
         if let Ok(mut cache) = self.cache.lock() {
-            if cache.len() >= BLOCK_CACHE {
-                cache.remove(0);
+            let mut total: usize = cache.iter().map(|(_, v)| v.len()).sum::<usize>() + raw.len();
+            while total > BLOCK_CACHE_BYTES && !cache.is_empty() {
+                total -= cache.remove(0).1.len();
             }
             cache.push((b, raw.clone()));
         }
