@@ -204,6 +204,28 @@ pub fn create(
     Ok(Box::new(ExtProj::new(scene, Params::from_options(opts))))
 }
 
+/// Whether the Projection of box `b` (world) on `plane` — its standard rectangle and,
+/// with `improved`, its improved one (§4), clipped to an `n`-pixel map — meets no pixel
+/// for which `touched` holds on the range it covers (§6.1 "fully visible"). `false` when
+/// the box is not beyond the far face of `cell` (its views are unbounded).
+pub(crate) fn projection_touches_nothing(
+    plane: &Plane,
+    cell: &LocalBox,
+    n: usize,
+    b: &Aabb3,
+    improved: bool,
+    touched: impl Fn([usize; 4]) -> bool,
+) -> bool {
+    let occ = plane.dir.box_to_local(b.min, b.max);
+    [false, improved].iter().all(|&imp| {
+        let Some((rect, _)) = occludee_projection(cell, &occ, plane.x, imp) else {
+            return false;
+        };
+        let (lo, hi) = (plane.to_px(rect.min), plane.to_px(rect.max));
+        clipped_pixel_range(lo, hi, n).is_none_or(|r| !touched(r))
+    })
+}
+
 /// One plane of one direction, ready for occludee tests.
 pub struct PlaneMap {
     pub plane: Plane,
@@ -279,13 +301,8 @@ impl PlaneMap {
     /// improved — clipped to the map touch no covered pixel. `false` when the box is
     /// not beyond the cell's far face (its views are unbounded).
     pub fn touches_nothing(&self, b: &Aabb3, improved: bool) -> bool {
-        let occ = self.plane.dir.box_to_local(b.min, b.max);
-        [false, improved].iter().all(|&imp| {
-            let Some((rect, _)) = occludee_projection(&self.cell, &occ, self.plane.x, imp) else {
-                return false;
-            };
-            let (lo, hi) = (self.plane.to_px(rect.min), self.plane.to_px(rect.max));
-            clipped_pixel_range(lo, hi, self.map.n).is_none_or(|r| !self.map.any_covered(r))
+        projection_touches_nothing(&self.plane, &self.cell, self.map.n, b, improved, |r| {
+            self.map.any_covered(r)
         })
     }
 

@@ -40,11 +40,11 @@
 //! must lie behind all of them.
 
 use super::depth_map::{
-    clipped_pixel_range, depth_down, depth_up, pixel_range, CoverageBuilder, DepthMap, OcclusionMap,
+    depth_down, depth_up, pixel_range, CoverageBuilder, DepthMap, OcclusionMap,
 };
 use super::planes::{Direction, LocalBox, Plane};
 use super::projection::{extended_projection, split_at, FACE_CLEARANCE_M};
-use super::{occludee::occludee_projection, ExtProj};
+use super::{occludee::occludee_projection, projection_touches_nothing, ExtProj};
 use sightline_geom::{Aabb3, DVec2, DVec3, ViewCell};
 
 /// How far beyond the cell the sweep reaches at most (m).
@@ -112,13 +112,8 @@ impl Sweep {
     /// (§6.1 "fully visible"; see [`super::PlaneMap::touches_nothing`]).
     pub fn touches_nothing(&self, b: &Aabb3, improved: bool) -> bool {
         self.planes.iter().all(|sp| {
-            let occ = sp.plane.dir.box_to_local(b.min, b.max);
-            [false, improved].iter().all(|&imp| {
-                let Some((rect, _)) = occludee_projection(&sp.cell, &occ, sp.plane.x, imp) else {
-                    return false;
-                };
-                let (lo, hi) = (sp.plane.to_px(rect.min), sp.plane.to_px(rect.max));
-                clipped_pixel_range(lo, hi, sp.umbra.n).is_none_or(|r| !sp.umbra.any_black(r))
+            projection_touches_nothing(&sp.plane, &sp.cell, sp.umbra.n, b, improved, |r| {
+                sp.umbra.any_black(r)
             })
         })
     }
