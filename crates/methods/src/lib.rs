@@ -26,6 +26,7 @@ pub mod check;
 pub mod dual_ray;
 pub mod erosion;
 pub mod ext_proj;
+pub(crate) mod kdtree;
 pub mod sampled;
 
 use serde::{Deserialize, Serialize};

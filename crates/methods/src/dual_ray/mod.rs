@@ -15,7 +15,7 @@
 //! Pipeline (one module per step):
 //! * [`occluders`] — the occluders: ground-based inner prisms, touching ones fused
 //!   (NOTES §1), decomposed into slabs along x and y, once per scene;
-//! * [`kdtree`] — the hierarchical subdivision of the occludees (§3): a node hidden
+//! * [`crate::kdtree`] — the hierarchical subdivision of the occludees (§3): a node hidden
 //!   from the cell stops the recursion; objects of visible leaves are tested one by one
 //!   (their outer prisms' boxes);
 //! * [`plane`] — reduction of a box-to-box test to a planar problem (§4): upper rims,
@@ -58,7 +58,6 @@
 
 pub mod discrete;
 pub mod exact;
-pub mod kdtree;
 pub mod occluders;
 pub mod plane;
 mod seed;
@@ -67,8 +66,8 @@ pub(crate) mod witness;
 
 pub use table1::{crossing_cells, occluded_area_m2, table1, Table1Row};
 
+use crate::kdtree::{KdTree, NodeKind};
 use crate::{MethodError, MethodOptions, VisibilityMethod};
-use kdtree::{KdTree, NodeKind};
 use occluders::{Axis, Decomposition};
 use plane::{Planar, Scratch};
 use rayon::prelude::*;

@@ -9,10 +9,8 @@
 //! bears on conservativeness, drawn with the same test as an object's). A fully
 //! visible node only saves the tests of its objects, which go into the PVS.
 
+use crate::kdtree::{KdTree, NodeKind};
 use sightline_geom::Aabb3;
-
-/// Objects per leaf at most.
-pub const LEAF_OBJECTS: usize = 4;
 
 /// What a test concludes about a node's box.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -22,60 +20,18 @@ pub enum Verdict {
     Unknown,
 }
 
-/// A bounding-box hierarchy over a set of objects, built by median splits along the
-/// longest axis of the boxes' centres.
+/// A bounding-box hierarchy over a set of objects (the kd-tree of `dual-ray`, one box
+/// per object).
 pub struct Hierarchy {
-    nodes: Vec<Node>,
-}
-
-struct Node {
-    bounds: Aabb3,
-    /// Leaf: the objects; inner: none.
-    objects: Vec<u32>,
-    children: Option<[usize; 2]>,
+    tree: KdTree,
 }
 
 impl Hierarchy {
     /// The hierarchy over `ids`, each with its box `bounds(id)`.
     pub fn build(ids: &[u32], bounds: impl Fn(u32) -> Aabb3) -> Self {
-        let mut items: Vec<(u32, Aabb3)> = ids.iter().map(|&i| (i, bounds(i))).collect();
-        let mut h = Hierarchy { nodes: Vec::new() };
-        if !items.is_empty() {
-            h.split(&mut items);
+        Hierarchy {
+            tree: KdTree::build(ids.iter().map(|&i| (i, bounds(i))).collect()),
         }
-        h
-    }
-
-    fn split(&mut self, items: &mut [(u32, Aabb3)]) -> usize {
-        let bounds = items
-            .iter()
-            .skip(1)
-            .fold(items[0].1, |acc, (_, b)| acc.union(*b));
-        let at = self.nodes.len();
-        self.nodes.push(Node {
-            bounds,
-            objects: Vec::new(),
-            children: None,
-        });
-        if items.len() <= LEAF_OBJECTS {
-            self.nodes[at].objects = items.iter().map(|(i, _)| *i).collect();
-            return at;
-        }
-        let s = bounds.size();
-        let axis = if s.x >= s.y && s.x >= s.z {
-            0
-        } else if s.y >= s.z {
-            1
-        } else {
-            2
-        };
-        let centre = |b: &Aabb3| b.min[axis] + b.max[axis];
-        items.sort_by(|a, b| centre(&a.1).total_cmp(&centre(&b.1)).then(a.0.cmp(&b.0)));
-        let (lo, hi) = items.split_at_mut(items.len() / 2);
-        let l = self.split(lo);
-        let r = self.split(hi);
-        self.nodes[at].children = Some([l, r]);
-        at
     }
 
     /// The objects not proven hidden: nodes are tested from the root with `test`; a
@@ -87,19 +43,25 @@ impl Hierarchy {
         visible: impl Fn(u32) -> bool,
     ) -> Vec<u32> {
         let mut out = Vec::new();
-        let mut stack: Vec<usize> = if self.nodes.is_empty() {
+        let mut stack: Vec<u32> = if self.tree.nodes.is_empty() {
             vec![]
         } else {
             vec![0]
         };
         while let Some(k) = stack.pop() {
-            let node = &self.nodes[k];
-            match test(&node.bounds) {
+            let node = &self.tree.nodes[k as usize];
+            match test(&node.bbox) {
                 Verdict::Hidden => {}
                 Verdict::FullyVisible => self.collect(k, &mut out),
-                Verdict::Unknown => match node.children {
-                    Some(c) => stack.extend(c),
-                    None => out.extend(node.objects.iter().copied().filter(|&i| visible(i))),
+                Verdict::Unknown => match node.kind {
+                    NodeKind::Inner { left, right } => stack.extend([left, right]),
+                    NodeKind::Leaf { first, len } => out.extend(
+                        self.tree
+                            .leaf_items(first, len)
+                            .iter()
+                            .map(|(i, _)| *i)
+                            .filter(|&i| visible(i)),
+                    ),
                 },
             }
         }
@@ -107,12 +69,15 @@ impl Hierarchy {
         out
     }
 
-    fn collect(&self, k: usize, out: &mut Vec<u32>) {
-        let node = &self.nodes[k];
-        out.extend(&node.objects);
-        if let Some(c) = node.children {
-            self.collect(c[0], out);
-            self.collect(c[1], out);
+    fn collect(&self, k: u32, out: &mut Vec<u32>) {
+        match self.tree.nodes[k as usize].kind {
+            NodeKind::Inner { left, right } => {
+                self.collect(left, out);
+                self.collect(right, out);
+            }
+            NodeKind::Leaf { first, len } => {
+                out.extend(self.tree.leaf_items(first, len).iter().map(|(i, _)| *i))
+            }
         }
     }
 }
