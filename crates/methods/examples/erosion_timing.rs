@@ -4,7 +4,8 @@
 //! `erosion_street_cells`). With `EROSION_WARM=1` every cell is run once before the
 //! timed run, so that the eroded occluders of every cell shape and fill threshold are
 //! cached (§5.1: a preprocessing shared by all cells of a grid) and the times are
-//! those of the per-cell tests alone.
+//! those of the per-cell tests alone. `EROSION_REPEAT=N` times every cell N times (for
+//! profiles of the per-cell tests).
 
 use sightline_geom::{DVec2, ViewCell};
 use sightline_methods::{create, MethodOptions};
@@ -81,7 +82,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             continue;
         }
         let t = Instant::now();
-        let method = create(m, scene.clone(), &MethodOptions::default())?;
+        let opts = MethodOptions {
+            resolution_px: std::env::var("EROSION_BINS")
+                .ok()
+                .and_then(|v| v.parse().ok()),
+            ..MethodOptions::default()
+        };
+        let method = create(m, scene.clone(), &opts)?;
         let prep = t.elapsed().as_secs_f64();
         let t = Instant::now();
         let first = method.pvs(&cells[0])?.len();
@@ -91,9 +98,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 method.pvs(cell)?;
             }
         }
+        let repeat: usize = std::env::var("EROSION_REPEAT")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(1);
         let mut ms = Vec::new();
         let mut lens = Vec::new();
-        for cell in &cells {
+        for cell in cells.iter().cycle().take(cells.len() * repeat.max(1)) {
             let t = Instant::now();
             lens.push(method.pvs(cell)?.len());
             ms.push(t.elapsed().as_secs_f64() * 1e3);

@@ -28,6 +28,7 @@ pub mod erosion;
 pub mod ext_proj;
 pub(crate) mod kdtree;
 pub mod sampled;
+pub(crate) mod seed;
 
 use serde::{Deserialize, Serialize};
 use sightline_geom::ViewCell;

@@ -8,7 +8,8 @@ use proptest::prelude::*;
 use sightline_geom::DVec2;
 use sightline_methods::erosion::erode::{erode, Element};
 use sightline_methods::erosion::field::HeightField;
-use sightline_methods::{create, MethodOptions};
+use sightline_methods::erosion::{ErosionMethod, Variant};
+use sightline_methods::{create, MethodOptions, VisibilityMethod};
 use sightline_scene::{Object, Scene};
 use std::sync::Arc;
 
@@ -185,6 +186,16 @@ proptest! {
         }
         let p = create("erosion-rays", scene.clone(), &MethodOptions::default()).unwrap().pvs(&c).unwrap();
         prop_assert!(missed(&p, &vs).is_empty(), "erosion-rays misses {:?} on {c}", missed(&p, &vs));
+        // The seed rays spare tests and change no PVS (crate::seed).
+        for (name, variant) in [("erosion", Variant::Full), ("erosion-rays", Variant::Rays)] {
+            let with = create(name, scene.clone(), &MethodOptions::default()).unwrap().pvs(&c).unwrap();
+            let without = ErosionMethod::new(name, variant, scene.clone(), &MethodOptions::default())
+                .unwrap()
+                .with_seed(false)
+                .pvs(&c)
+                .unwrap();
+            prop_assert_eq!(with, without, "{} with and without seed on {}", name, c);
+        }
         // |erosion-cell| >= |erosion-segment| does not always hold: the eye raise that
         // keeps §3.3 conservative in 3D can make a segment test looser than the cell
         // test for a tall occludee near the cell (seen on random cities; reported).

@@ -7,7 +7,8 @@ mod erosion_support;
 
 use erosion_support::*;
 use sightline_geom::{Aabb2, DVec2, ViewCell};
-use sightline_methods::{create, MethodOptions};
+use sightline_methods::erosion::{ErosionMethod, Variant};
+use sightline_methods::{create, MethodOptions, VisibilityMethod};
 use sightline_scene::import::{load, ImportOptions};
 use sightline_scene::Scene;
 use std::path::PathBuf;
@@ -77,6 +78,21 @@ fn check_scene(file: &str) {
             let miss: Vec<u32> = missed(&p, &vs).iter().map(|&i| ids[i as usize]).collect();
             assert!(miss.is_empty(), "{m} misses {miss:?} on {file} cell {cell}");
         }
+        // The seed rays change no PVS (crate::seed).
+        let with = create("erosion", sub.clone(), &MethodOptions::default())
+            .and_then(|m| m.pvs(&cell))
+            .expect("pvs");
+        let without = ErosionMethod::new(
+            "erosion",
+            Variant::Full,
+            sub.clone(),
+            &MethodOptions::default(),
+        )
+        .expect("method")
+        .with_seed(false)
+        .pvs(&cell)
+        .expect("pvs");
+        assert_eq!(with, without, "seed changes the PVS on {file} cell {cell}");
     }
 }
 

@@ -23,7 +23,7 @@
 //! * [`discrete`] — §5.2 with exact union coverage per row (NOTES §2), most rows decided
 //!   by bit-parallel `u128` rows, refined with per-band lists of the pieces that matter;
 //! * [`exact`] — §5.1 with exact predicates;
-//! * [`seed`] — objects met first by rays from a few eyes of the cell are reported
+//! * [`crate::seed`] — objects met first by rays from a few eyes of the cell are reported
 //!   without a test, and so are the kd-nodes holding them (it changes no PVS);
 //! * [`witness`] — a single ray verified clear (exact predicates) answers "visible"
 //!   without gathering the whole shaft; it changes no answer of either planar method.
@@ -60,7 +60,6 @@ pub mod discrete;
 pub mod exact;
 pub mod occluders;
 pub mod plane;
-mod seed;
 mod table1;
 pub(crate) mod witness;
 
@@ -117,7 +116,7 @@ pub struct TraversalStats {
     pub visible: u64,
     /// Of which settled by a witness ray (without gathering the whole shaft).
     pub witnessed: u64,
-    /// Objects reported without a test: met first by a seed ray ([`seed`]).
+    /// Objects reported without a test: met first by a seed ray ([`crate::seed`]).
     pub seeded: u64,
 }
 
@@ -134,7 +133,7 @@ pub struct DualRay {
     /// Objects without a usable bound: always reported.
     always: Vec<u32>,
     /// Rays from eyes of the cell that report what they meet first.
-    seed: seed::SeedGrid,
+    seed: crate::seed::SeedGrid,
     use_seed: bool,
 }
 
@@ -186,7 +185,7 @@ impl DualRay {
                     || occluders::decompose(&occ, &clusters, Axis::Y),
                 )
             },
-            || seed::SeedGrid::new(&scene, origin, &occ),
+            || crate::seed::SeedGrid::new(&scene, origin, &occ),
         );
         let o3 = origin.extend(0.0);
         let mut items = Vec::new();
@@ -227,7 +226,7 @@ impl DualRay {
         }
     }
 
-    /// Turn the seed rays ([`seed`]) on or off (on by default). The PVS is the same
+    /// Turn the seed rays ([`crate::seed`]) on or off (on by default). The PVS is the same
     /// either way; off, every object and node is proven by its own test.
     pub fn with_seed(mut self, on: bool) -> Self {
         self.use_seed = on;
@@ -299,7 +298,7 @@ impl DualRay {
         self.seed.mark(
             &self.local(cell),
             &mut seen,
-            &mut seed::SeedScratch::default(),
+            &mut crate::seed::SeedScratch::default(),
         );
         (0..seen.len() as u32)
             .filter(|i| seen[*i as usize])
@@ -319,9 +318,9 @@ impl DualRay {
             return (Vec::new(), Vec::new());
         }
         let mut seen = vec![false; self.scene.objects.len()];
-        stats.seeded = self
-            .seed
-            .mark(a, &mut seen, &mut seed::SeedScratch::default()) as u64;
+        stats.seeded =
+            self.seed
+                .mark(a, &mut seen, &mut crate::seed::SeedScratch::default()) as u64;
         let nodes = &self.tree.nodes;
         let mut node_seen = vec![false; nodes.len()];
         for n in (0..nodes.len()).rev() {

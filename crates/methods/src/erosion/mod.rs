@@ -23,6 +23,8 @@
 //!   occluders marched front to back along each needed direction with the inner rule
 //!   and farthest depth, stopping once the horizon is closed (§7 "Scaling"); occludees
 //!   with outer coverage and nearest depth.
+//! * [`crate::seed`]: objects met first by exact rays from a few eyes of the cell are
+//!   in the PVS without a test (the erosion would keep them anyway; no PVS changes).
 //!
 //! Hierarchy (§7 "Bad scenario" and "Viewcells"): Theorem 1 erodes every occluder by
 //! the whole cell, so a 25 m cell in a city of 15 m deep building rows sees through
@@ -38,7 +40,7 @@
 //! top faces of occludees as targets (the paper's "reduce the occludee by one half of
 //! the viewcell height" is the same argument, less tight).
 //!
-//! Parameter: `resolution_px` = number of azimuth bins (default 2048); the occluder
+//! Parameter: `resolution_px` = number of azimuth bins (default 4096); the occluder
 //! raster's pixel is [`field::PIXEL_M`] (larger for huge scenes).
 
 pub mod erode;
@@ -47,12 +49,14 @@ pub mod occlusion;
 pub mod rays;
 pub mod shrink;
 
+use crate::dual_ray::occluders::collect_occluders;
+use crate::seed::{SeedGrid, SeedScratch};
 use crate::{MethodError, MethodOptions, VisibilityMethod};
 use erode::Element;
 use field::{HeightField, MinPyramid};
 use occlusion::{Bins, PolarMap, Target};
 use shrink::Region;
-use sightline_geom::{Aabb2, DVec2, ViewCell};
+use sightline_geom::{Aabb2, Aabb3, DVec2, ViewCell};
 use sightline_scene::Scene;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -65,7 +69,7 @@ pub const MAX_DEPTH: usize = 3;
 /// level: only quarters with free space, for the objects their parent may still see.
 pub const RAYS_MAX_DEPTH: usize = 4;
 /// The first pass of each test uses this many times fewer azimuth bins.
-const COARSE_FACTOR: usize = 8;
+const COARSE_FACTOR: usize = 16;
 /// Sub-cells are not made smaller than this (m).
 pub const MIN_SUBCELL_M: f64 = 2.0;
 /// The same for `erosion-rays` (a 25 m cell reaches 1.6 m quarters at its 4th level).
@@ -74,7 +78,7 @@ pub const RAYS_MIN_SUBCELL_M: f64 = 1.5;
 const CACHE_BYTES: usize = 3 << 29;
 
 /// Default number of azimuth bins of the occlusion map.
-pub const DEFAULT_BINS: u32 = 2048;
+pub const DEFAULT_BINS: u32 = 4096;
 
 /// Which of the four methods of Fig. 9.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -127,6 +131,11 @@ pub struct ErosionMethod {
     /// Eroded occluders per (cell half size in µm, element, fill threshold in dm), with
     /// the tick of their last use (least recently used evicted beyond `CACHE_BYTES`).
     cache: Mutex<(u64, ErodedCache)>,
+    /// Seed rays ([`crate::seed`]) in a frame centred at `origin`; `use_seed` turns them
+    /// on (the default) or off: the PVS is the same.
+    seed: SeedGrid,
+    origin: DVec2,
+    use_seed: bool,
 }
 
 type CacheKey = (i64, i64, Element, u16);
@@ -165,6 +174,12 @@ impl ErosionMethod {
             )));
         }
         let field = HeightField::build(&scene);
+        let origin = if scene.bounds.is_empty() {
+            DVec2::ZERO
+        } else {
+            scene.bounds.center().truncate().round()
+        };
+        let seed = SeedGrid::new(&scene, origin, &collect_occluders(&scene, origin));
         let tops = scene
             .objects
             .iter()
@@ -187,7 +202,17 @@ impl ErosionMethod {
             tops,
             bins: bins as usize,
             cache: Mutex::new((0, HashMap::new())),
+            seed,
+            origin,
+            use_seed: true,
         })
+    }
+
+    /// Turn the seed rays ([`crate::seed`]) on or off (on by default). The PVS is the
+    /// same: the seed only spares the tests of objects a ray from the cell reaches.
+    pub fn with_seed(mut self, on: bool) -> Self {
+        self.use_seed = on;
+        self
     }
 
     /// The erosion of the scene's occluders (courtyards filled above `fill_dm`) by
@@ -549,6 +574,12 @@ impl VisibilityMethod for ErosionMethod {
         }
         let rect = Aabb2::new(cell.min.truncate(), cell.max.truncate());
         let mut found = vec![false; self.scene.objects.len()];
+        if self.use_seed {
+            let o3 = self.origin.extend(0.0);
+            let local = Aabb3::new(cell.min - o3, cell.max - o3);
+            self.seed
+                .mark(&local, &mut found, &mut SeedScratch::default());
+        }
         let all: Vec<u32> = (0..self.scene.objects.len() as u32).collect();
         self.refine(cell, rect, all, 0, &mut found);
         let visible: Vec<u32> = (0..found.len() as u32)

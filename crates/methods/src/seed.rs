@@ -1,30 +1,39 @@
-//! Seeding a PVS with objects seen along single rays from a few eyes in the cell.
+//! Seeding a PVS with objects seen along single rays from a few eyes in the cell,
+//! shared by `dual-ray` and the erosion family.
 //!
-//! On a street cell of a large city most box-to-box tests answer *visible* (the objects
-//! along the streets the cell opens onto and the kd-nodes holding them), and a visible
-//! answer is the most expensive one: the whole shaft, kilometres long, is gathered and
-//! refined down to the finest rows (§5.2 of Koltun et al. 2001). Yet most of these
-//! objects are seen from almost anywhere in the cell. So before the traversal we cast
-//! rays from a few eyes on the cell's top face, in many azimuths, through the same
-//! occluders the method uses (ground-based inner prisms), and accept every object a ray
-//! reaches first. The traversal then skips the tests of accepted objects and of the
-//! kd-nodes that contain one (a node holding a visible object is visible).
+//! On a street cell of a large city many tests answer *visible* (the objects along the
+//! streets the cell opens onto), and a visible answer is the most expensive one: for
+//! `dual-ray` the whole shaft, kilometres long, is gathered and refined down to the
+//! finest rows (§5.2 of Koltun et al. 2001); for erosion the object is tested again in
+//! every sub-cell down to the deepest level. Yet most of these objects are seen from
+//! almost anywhere in the cell. So before the tests we cast rays from a few eyes on the
+//! cell's top face, in many azimuths, through the occluders both methods use
+//! (ground-based inner prisms), and accept every object a ray reaches first. The
+//! methods then skip the tests of accepted objects (and `dual-ray` those of the kd-nodes
+//! that contain one: a node holding a visible object is visible).
 //!
 //! **Why no PVS changes.** An accepted object `O` is met by a 3D ray from a point of the
 //! cell that passes strictly above every ground-based occluder before `O`'s outer prism
 //! (2.5D: along an azimuth, an occluder entered at distance `d` with top `h` blocks the
-//! elevations below `(h − z) / d`, and nothing else blocks in the method's model). That
-//! ray lies in a vertical plane through both boxes, so no planar problem of §4 can cover
-//! it: both `dual-ray-exact` and `dual-ray` report `O` and every node above it anyway.
+//! elevations below `(h − z) / d`, and nothing else blocks in the methods' model).
+//! * `dual-ray`: that ray lies in a vertical plane through both boxes, so no planar
+//!   problem of §4 can cover it: both `dual-ray-exact` and `dual-ray` report `O` and
+//!   every node above it anyway.
+//! * erosion: its occluders are an inner raster of the same prisms (a subset of them),
+//!   and Theorems 1 and 2 hide an object only if the occluders block every sight line
+//!   from the cell to it; closed courtyards are filled only above the escape height of
+//!   every free eye of the cell (`erosion::field`), which such a ray, rising from below
+//!   that height, clears too. So every erosion method reports `O` anyway.
+//!
 //! The seed only spares the proofs. Errors of rounding can only accept an object whose
 //! ray grazes an occluder: that object is kept, never dropped, so conservativeness does
-//! not depend on this module at all.
+//! not depend on this module at all. Tests compare the PVS with and without the seed.
 //!
 //! Per azimuth the march stops once the running horizon is above what the tallest prism
 //! of the scene could reach further on, so azimuths into a facade cost a few buckets and
 //! only the ones along open streets run far.
 
-use super::occluders::{BucketGrid, Occluder, GROUND_EPS_M};
+use crate::dual_ray::occluders::{BucketGrid, Occluder, GROUND_EPS_M};
 use sightline_geom::{Aabb3, DVec2};
 use sightline_scene::Scene;
 
