@@ -495,7 +495,7 @@ fn crossings(edges: &[[DVec2; 2]], eye: DVec2, d: DVec2) -> Option<(f64, f64)> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::occluders::collect_occluders;
+    use crate::dual_ray::occluders::collect_occluders;
     use super::*;
     use sightline_geom::{DVec3, Polygon};
     use sightline_scene::Object;
