@@ -33,7 +33,7 @@
 //! of the scene could reach further on, so azimuths into a facade cost a few buckets and
 //! only the ones along open streets run far.
 
-use crate::dual_ray::occluders::{BucketGrid, Occluder, GROUND_EPS_M};
+use crate::dual_ray::occluders::{local_rings, BucketGrid, Occluder, GROUND_EPS_M};
 use sightline_geom::{Aabb3, DVec2};
 use sightline_scene::Scene;
 
@@ -159,12 +159,7 @@ impl SeedGrid {
         let mut merged = vec![false; occ.len()];
         for (id, o) in scene.objects.iter().enumerate() {
             for p in &o.outer {
-                let rings: Vec<Vec<DVec2>> = p
-                    .footprint
-                    .rings()
-                    .filter(|r| r.len() >= 3)
-                    .map(|r| r.iter().map(|v| *v - origin).collect())
-                    .collect();
+                let rings = local_rings(&p.footprint, origin);
                 let same = by_object[id]
                     .iter()
                     .copied()
@@ -495,8 +490,8 @@ fn crossings(edges: &[[DVec2; 2]], eye: DVec2, d: DVec2) -> Option<(f64, f64)> {
 
 #[cfg(test)]
 mod tests {
-    use crate::dual_ray::occluders::collect_occluders;
     use super::*;
+    use crate::dual_ray::occluders::collect_occluders;
     use sightline_geom::{DVec3, Polygon};
     use sightline_scene::Object;
 

@@ -24,7 +24,7 @@
 //! the paper needs occluders that contain the vertical wall under their top. Raised
 //! prisms (arcades, overhangs) are ignored, which is conservative.
 
-use sightline_geom::{orient2d, DVec2, Orientation};
+use sightline_geom::{orient2d, DVec2, Orientation, Polygon};
 use sightline_scene::Scene;
 
 /// A prism whose base is at most this high counts as standing on the ground.
@@ -205,12 +205,7 @@ pub(crate) fn collect_occluders(scene: &Scene, origin: DVec2) -> Vec<Occluder> {
             if p.base > GROUND_EPS_M || p.top <= GROUND_EPS_M || !p.top.is_finite() {
                 continue;
             }
-            let rings: Vec<Vec<DVec2>> = p
-                .footprint
-                .rings()
-                .filter(|r| r.len() >= 3)
-                .map(|r| r.iter().map(|v| *v - origin).collect())
-                .collect();
+            let rings = local_rings(&p.footprint, origin);
             if rings.is_empty() || rings.iter().flatten().any(|v| !v.is_finite()) {
                 continue;
             }
@@ -230,6 +225,16 @@ pub(crate) fn collect_occluders(scene: &Scene, origin: DVec2) -> Vec<Occluder> {
         }
     }
     out
+}
+
+/// The rings (exterior and holes, at least 3 vertices) of `footprint` translated by
+/// `-origin`.
+pub(crate) fn local_rings(footprint: &Polygon, origin: DVec2) -> Vec<Vec<DVec2>> {
+    footprint
+        .rings()
+        .filter(|r| r.len() >= 3)
+        .map(|r| r.iter().map(|v| *v - origin).collect())
+        .collect()
 }
 
 /// Connected components of occluders whose bounding rectangles touch (closed overlap).
