@@ -5,7 +5,7 @@
 //! timed run, so that the eroded occluders of every cell shape and fill threshold are
 //! cached (§5.1: a preprocessing shared by all cells of a grid) and the times are
 //! those of the per-cell tests alone. `EROSION_REPEAT=N` times every cell N times (for
-//! profiles of the per-cell tests).
+//! profiles of the per-cell tests); `EROSION_BINS=N` sets the number of azimuth bins.
 
 use sightline_geom::{DVec2, ViewCell};
 use sightline_methods::{create, MethodOptions};
