@@ -66,6 +66,7 @@ pub(crate) mod witness;
 pub use table1::{crossing_cells, occluded_area_m2, table1, Table1Row};
 
 use crate::kdtree::{KdTree, NodeKind};
+use crate::seed::{SeedGrid, SeedScratch};
 use crate::{MethodError, MethodOptions, VisibilityMethod};
 use occluders::{Axis, Decomposition};
 use plane::{Planar, Scratch};
@@ -133,7 +134,7 @@ pub struct DualRay {
     /// Objects without a usable bound: always reported.
     always: Vec<u32>,
     /// Rays from eyes of the cell that report what they meet first.
-    seed: crate::seed::SeedGrid,
+    seed: SeedGrid,
     use_seed: bool,
 }
 
@@ -171,11 +172,7 @@ impl DualRay {
     /// Prepare the method: fused occluder decompositions along x and y, kd-tree of the
     /// occludees.
     pub fn new(name: &'static str, scene: Arc<Scene>, planarity: Planarity) -> Self {
-        let origin = if scene.bounds.is_empty() {
-            DVec2::ZERO
-        } else {
-            scene.bounds.center().truncate().round()
-        };
+        let origin = occluders::local_origin(&scene);
         let occ = occluders::collect_occluders(&scene, origin);
         let clusters = occluders::clusters(&occ);
         let ((decomp_x, decomp_y), seed) = rayon::join(
@@ -185,7 +182,7 @@ impl DualRay {
                     || occluders::decompose(&occ, &clusters, Axis::Y),
                 )
             },
-            || crate::seed::SeedGrid::new(&scene, origin, &occ),
+            || SeedGrid::new(&scene, origin, &occ),
         );
         let o3 = origin.extend(0.0);
         let mut items = Vec::new();
@@ -295,11 +292,8 @@ impl DualRay {
     /// Every one of them is in the `dual-ray-exact` PVS of the cell.
     pub fn seed_objects(&self, cell: &ViewCell) -> Vec<u32> {
         let mut seen = vec![false; self.scene.objects.len()];
-        self.seed.mark(
-            &self.local(cell),
-            &mut seen,
-            &mut crate::seed::SeedScratch::default(),
-        );
+        self.seed
+            .mark(&self.local(cell), &mut seen, &mut SeedScratch::default());
         (0..seen.len() as u32)
             .filter(|i| seen[*i as usize])
             .collect()
@@ -318,9 +312,7 @@ impl DualRay {
             return (Vec::new(), Vec::new());
         }
         let mut seen = vec![false; self.scene.objects.len()];
-        stats.seeded =
-            self.seed
-                .mark(a, &mut seen, &mut crate::seed::SeedScratch::default()) as u64;
+        stats.seeded = self.seed.mark(a, &mut seen, &mut SeedScratch::default()) as u64;
         let nodes = &self.tree.nodes;
         let mut node_seen = vec![false; nodes.len()];
         for n in (0..nodes.len()).rev() {

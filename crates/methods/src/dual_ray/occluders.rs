@@ -227,6 +227,16 @@ pub(crate) fn collect_occluders(scene: &Scene, origin: DVec2) -> Vec<Occluder> {
     out
 }
 
+/// The origin of the methods' local frame for `scene` (coordinates minus it keep their
+/// precision, NOTES §3): the centre of its bounds, rounded to the metre.
+pub(crate) fn local_origin(scene: &Scene) -> DVec2 {
+    if scene.bounds.is_empty() {
+        DVec2::ZERO
+    } else {
+        scene.bounds.center().truncate().round()
+    }
+}
+
 /// The rings (exterior and holes, at least 3 vertices) of `footprint` translated by
 /// `-origin`.
 pub(crate) fn local_rings(footprint: &Polygon, origin: DVec2) -> Vec<Vec<DVec2>> {

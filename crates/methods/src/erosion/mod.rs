@@ -49,7 +49,7 @@ pub mod occlusion;
 pub mod rays;
 pub mod shrink;
 
-use crate::dual_ray::occluders::collect_occluders;
+use crate::dual_ray::occluders::{collect_occluders, local_origin};
 use crate::seed::{SeedGrid, SeedScratch};
 use crate::{MethodError, MethodOptions, VisibilityMethod};
 use erode::Element;
@@ -173,13 +173,11 @@ impl ErosionMethod {
                 "resolution {bins} out of range (8..=1048576 azimuth bins)"
             )));
         }
-        let field = HeightField::build(&scene);
-        let origin = if scene.bounds.is_empty() {
-            DVec2::ZERO
-        } else {
-            scene.bounds.center().truncate().round()
-        };
-        let seed = SeedGrid::new(&scene, origin, &collect_occluders(&scene, origin));
+        let origin = local_origin(&scene);
+        let (field, seed) = rayon::join(
+            || HeightField::build(&scene),
+            || SeedGrid::new(&scene, origin, &collect_occluders(&scene, origin)),
+        );
         let tops = scene
             .objects
             .iter()
