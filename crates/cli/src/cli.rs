@@ -29,6 +29,10 @@ pub struct SceneArg {
     /// Coordinate reference of the input (GeoJSON/OSM): detect, projected metres, or WGS84 lon/lat.
     #[arg(long, value_enum, default_value = "auto")]
     pub crs: CrsArg,
+    /// Abort on the first feature that cannot be used instead of skipping it (by default
+    /// it is skipped with a counted `skipped-feature` warning naming it).
+    #[arg(long)]
+    pub strict: bool,
 }
 
 fn parse_cell(s: &str) -> Result<ViewCell, String> {

@@ -15,7 +15,11 @@ pub fn load_scene(arg: &SceneArg) -> anyhow::Result<Scene> {
         CrsArg::Projected => Crs::Projected,
         CrsArg::Wgs84 => Crs::Wgs84,
     };
-    sightline_scene::import::load(&arg.scene, &ImportOptions { crs })
+    let opts = ImportOptions {
+        crs,
+        strict: arg.strict,
+    };
+    sightline_scene::import::load(&arg.scene, &opts)
         .with_context(|| format!("cannot load {}", arg.scene.display()))
 }
 

@@ -177,3 +177,24 @@ fn a_closed_stdout_ends_quietly() {
     assert!(!err.contains("panicked"), "{err}");
     assert_eq!(out.status.code(), Some(0), "{err}");
 }
+
+/// Inputs with a few broken features load the rest (counted `skipped-feature` warnings);
+/// `--strict` makes the first broken feature the one error line.
+#[test]
+fn strict_aborts_where_the_default_skips() {
+    for (file, expect) in cases() {
+        if !(file.starts_with("warn-") && expect == "skipped-feature") {
+            continue;
+        }
+        let path = corpus().join(&file);
+        let (code, _, err) = sightline(&["info", path.to_str().unwrap(), "--strict"]);
+        let lines: Vec<&str> = err.lines().collect();
+        assert!(
+            code == 1
+                && lines.len() == 1
+                && lines[0].starts_with("error: ")
+                && lines[0].contains("feature "),
+            "{file}: exit {code}, stderr {err:?}"
+        );
+    }
+}

@@ -250,7 +250,7 @@ fn obj_round_trips_through_the_importer() {
     );
     let mut out = Vec::new();
     export::write_obj(&s, &mut out).unwrap();
-    let back = obj::parse(&out).unwrap();
+    let back = obj::parse(&out, &Default::default()).unwrap();
     assert_eq!(back.objects.len(), s.objects.len());
     for (a, b) in s.objects.iter().zip(&back.objects) {
         assert!(

@@ -41,3 +41,36 @@ fn buildings_heights_and_multipolygon() {
         _ => unreachable!(),
     }
 }
+
+/// One bad building never aborts a city: each is skipped with a counted warning naming
+/// it (the way), the others load; `strict` restores the abort on the first one.
+#[test]
+fn broken_parts_are_skipped_and_named() {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/broken_parts.osm.pbf");
+    let s = load(&p, &ImportOptions::default()).unwrap();
+    let names: Vec<_> = s.objects.iter().map(|o| o.name.clone().unwrap()).collect();
+    assert_eq!(names, ["way/101", "way/105"]);
+    let skipped: Vec<&str> = s
+        .warnings
+        .iter()
+        .filter(|w| w.kind == "skipped-feature")
+        .map(|w| w.message.as_str())
+        .collect();
+    assert_eq!(skipped.len(), 3, "{skipped:?}");
+    for (way, why) in [
+        ("way/102", "min_height 30 is not below height 9"),
+        ("way/103", "node 99 is missing"),
+        ("way/104", "not a number"),
+    ] {
+        assert!(
+            skipped.iter().any(|m| m.contains(way) && m.contains(why)),
+            "{way}: {why} not in {skipped:?}"
+        );
+    }
+    let strict = ImportOptions {
+        strict: true,
+        ..ImportOptions::default()
+    };
+    let e = load(&p, &strict).unwrap_err().to_string();
+    assert!(e.contains("way/103"), "{e}");
+}

@@ -5,7 +5,7 @@
 //! cannot be used to read the server's file system.
 
 use crate::cache::{CacheError, Priority};
-use crate::limits::{guard, json_error, percent_decode};
+use crate::limits::{guard, json_error, over_capacity, percent_decode};
 use crate::{memory_kib, walk, web, AppState};
 use axum::extract::{DefaultBodyLimit, RawQuery, State};
 use axum::http::{header, StatusCode};
@@ -100,7 +100,17 @@ async fn pvs(State(s): State<Arc<AppState>>, RawQuery(q): RawQuery) -> Response 
     let Some(cell) = s.source().cell(cell_id) else {
         return json_error(StatusCode::INTERNAL_SERVER_ERROR, "cell lookup failed");
     };
-    match s.cache.get(cell_id, Priority::Demand).await {
+    // A request that has waited too long gives up (`503`); if nobody else waits for
+    // the cell, the cache drops the queued job.
+    let got = tokio::time::timeout(s.config.pvs_timeout, s.cache.get(cell_id, Priority::Demand));
+    let Ok(got) = got.await else {
+        s.counters.http_refused.fetch_add(1, Ordering::Relaxed);
+        return over_capacity(format!(
+            "server over capacity: the PVS of cell {cell_id} was not ready within {} s, retry",
+            s.config.pvs_timeout.as_secs_f64()
+        ));
+    };
+    match got {
         Ok(v) => Json(json!({
             "cell": cell,
             "cell_id": cell_id,
@@ -183,6 +193,8 @@ async fn stats(State(s): State<Arc<AppState>>) -> Response {
         "prefetch_hits": c.prefetch_hits.load(Ordering::Relaxed),
         "bytes_sent": c.bytes_sent.load(Ordering::Relaxed),
         "http_rate_limited": c.http_limited.load(Ordering::Relaxed),
+        "http_over_capacity": c.http_refused.load(Ordering::Relaxed),
+        "http_queued": s.admission.queued(),
         "cache": s.cache.stats(),
         "memory_kib": { "rss": rss, "peak": peak },
     }))

@@ -11,8 +11,9 @@
 //! * [`source`] — where a cell's PVS comes from (a method on-line, or a `.pvs` file);
 //! * [`cache`] — LRU cache and bounded worker pool in front of the source;
 //! * [`geometry`] — the compact binary object geometry (`SLG1`);
-//! * [`api`] — HTTP endpoints; [`walk`] — WebSocket sessions; [`limits`] — token and rate
-//!   limits; [`web`] — the embedded viewer.
+//! * [`api`] — HTTP endpoints; [`walk`] — WebSocket sessions; [`limits`] — token, rate
+//!   limits and admission; [`conn`] — the accept loop, connection cap and timeouts;
+//!   [`web`] — the embedded viewer.
 //!
 //! ```no_run
 //! # async fn demo() -> std::io::Result<()> {
@@ -30,6 +31,7 @@
 
 pub mod api;
 pub mod cache;
+pub mod conn;
 pub mod geometry;
 pub mod grid;
 pub mod limits;
@@ -43,9 +45,9 @@ use sightline_geom::DVec3;
 use sightline_scene::Scene;
 use source::SharedSource;
 use std::future::Future;
-use std::net::SocketAddr;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::Arc;
+use std::time::Duration;
 use tokio::sync::watch;
 
 /// Limits and options of a server.
@@ -71,6 +73,20 @@ pub struct ServerConfig {
     pub max_held_cells: usize,
     /// Malformed messages tolerated before a session is closed.
     pub max_session_errors: u32,
+    /// Per-address HTTP rate limits apply to loopback clients too (off by default: a
+    /// reverse proxy on the same host sends every client from 127.0.0.1).
+    pub rate_limit_loopback: bool,
+    /// Most open client connections (kept below the open-file limit; see [`conn`]).
+    pub max_connections: usize,
+    /// A client must send a request's headers within this time, or is disconnected.
+    pub header_read_timeout: Duration,
+    /// Most `/api` requests handled at once, most waiting for a turn, and how long one
+    /// may wait (see [`limits::Admission`]); beyond, `503` with a JSON error.
+    pub max_inflight: usize,
+    pub max_queued: usize,
+    pub queue_timeout: Duration,
+    /// Longest a `/api/pvs` request waits for its cell's PVS before `503`.
+    pub pvs_timeout: Duration,
 }
 
 impl Default for ServerConfig {
@@ -87,6 +103,13 @@ impl Default for ServerConfig {
             max_ids_per_request: 8192,
             max_held_cells: 32,
             max_session_errors: 64,
+            rate_limit_loopback: false,
+            max_connections: 16_384,
+            header_read_timeout: Duration::from_secs(10),
+            max_inflight: 1024,
+            max_queued: 16_384,
+            queue_timeout: Duration::from_secs(10),
+            pvs_timeout: Duration::from_secs(30),
         }
     }
 }
@@ -102,6 +125,8 @@ pub struct Counters {
     pub prefetch_hits: AtomicU64,
     pub bytes_sent: AtomicU64,
     pub http_limited: AtomicU64,
+    /// Requests answered `503` by admission control.
+    pub http_refused: AtomicU64,
 }
 
 /// Everything the handlers share.
@@ -114,6 +139,7 @@ pub struct AppState {
     pub config: ServerConfig,
     pub counters: Counters,
     pub limiter: limits::RateLimiter,
+    pub admission: limits::Admission,
     pub boxes: axum::body::Bytes,
     shutdown: watch::Receiver<bool>,
 }
@@ -148,6 +174,8 @@ impl Server {
         let cache = PvsCache::new(source, config.cache.clone());
         let (shutdown_tx, shutdown) = watch::channel(false);
         let limiter = limits::RateLimiter::new(config.http_rate_per_s, config.http_burst);
+        let admission =
+            limits::Admission::new(config.max_inflight, config.max_queued, config.queue_timeout);
         Server {
             state: Arc::new(AppState {
                 scene,
@@ -157,6 +185,7 @@ impl Server {
                 config,
                 counters: Counters::default(),
                 limiter,
+                admission,
                 boxes,
                 shutdown,
             }),
@@ -180,16 +209,20 @@ impl Server {
         listener: tokio::net::TcpListener,
         shutdown: impl Future<Output = ()> + Send + 'static,
     ) -> std::io::Result<()> {
-        let app = self
-            .router()
-            .into_make_service_with_connect_info::<SocketAddr>();
+        let router = self.router();
         let tx = self.shutdown_tx;
-        let result = axum::serve(listener, app)
-            .with_graceful_shutdown(async move {
-                shutdown.await;
-                let _ = tx.send(true);
-            })
-            .await;
+        let shutdown = async move {
+            shutdown.await;
+            let _ = tx.send(true);
+        };
+        let result = conn::serve(
+            listener,
+            router,
+            &self.state.config,
+            shutdown,
+            Duration::from_secs(30),
+        )
+        .await;
         let cache = self.state.cache.clone();
         let _ = tokio::task::spawn_blocking(move || cache.shutdown()).await;
         result

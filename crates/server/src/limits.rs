@@ -1,10 +1,17 @@
-//! Access token and rate limits.
+//! Access token, rate limits and admission.
 //!
 //! * `--token T`: every `/api` request must carry `T`, as `?token=T` (browsers cannot set
 //!   headers on a WebSocket) or `Authorization: Bearer T`. Compared in constant time.
 //! * HTTP requests are rate-limited per client address by a token bucket; WebSocket
 //!   messages per session by another (see [`crate::walk`]). Over the limit a request gets
-//!   `429` with a JSON error, a message gets an error frame.
+//!   `429` with a JSON error, a message gets an error frame. Loopback addresses are not
+//!   limited unless [`crate::ServerConfig::rate_limit_loopback`] is set: behind a reverse
+//!   proxy on the same host every client comes from 127.0.0.1, and one bucket for all
+//!   of them would turn a crowd into errors.
+//! * [`Admission`]: at most `max_inflight` requests are handled at once and at most
+//!   `max_queued` wait for a turn, each for at most `queue_timeout`; beyond that a request
+//!   gets `503` with a JSON error and `retry-after` at once. This bounds the memory and
+//!   the work of a burst, whatever its size, and lets every admitted request finish.
 
 use crate::AppState;
 use axum::extract::{ConnectInfo, Request, State};
@@ -13,9 +20,10 @@ use axum::middleware::Next;
 use axum::response::{IntoResponse, Response};
 use std::collections::HashMap;
 use std::net::{IpAddr, SocketAddr};
-use std::sync::atomic::Ordering;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
-use std::time::Instant;
+use std::time::{Duration, Instant};
+use tokio::sync::{OwnedSemaphorePermit, Semaphore};
 
 /// A token bucket: `rate` tokens per second up to `burst`.
 #[derive(Clone, Debug)]
@@ -84,6 +92,65 @@ impl RateLimiter {
     }
 }
 
+/// Bounded in-flight and queued requests (see the module doc).
+pub struct Admission {
+    inflight: Arc<Semaphore>,
+    waiting: AtomicUsize,
+    max_queued: usize,
+    queue_timeout: Duration,
+}
+
+/// Why a request was not admitted.
+#[derive(Debug, PartialEq, Eq)]
+pub enum Refusal {
+    /// Every in-flight slot is taken and the queue is full.
+    QueueFull,
+    /// No slot came free within the queue timeout.
+    Timeout,
+}
+
+impl Admission {
+    pub fn new(max_inflight: usize, max_queued: usize, queue_timeout: Duration) -> Self {
+        Admission {
+            inflight: Arc::new(Semaphore::new(max_inflight.max(1))),
+            waiting: AtomicUsize::new(0),
+            max_queued,
+            queue_timeout,
+        }
+    }
+
+    /// A slot to handle one request, held until the permit is dropped.
+    pub async fn admit(&self) -> Result<OwnedSemaphorePermit, Refusal> {
+        if let Ok(p) = self.inflight.clone().try_acquire_owned() {
+            return Ok(p);
+        }
+        if self.waiting.fetch_add(1, Ordering::AcqRel) >= self.max_queued {
+            self.waiting.fetch_sub(1, Ordering::AcqRel);
+            return Err(Refusal::QueueFull);
+        }
+        let r =
+            tokio::time::timeout(self.queue_timeout, self.inflight.clone().acquire_owned()).await;
+        self.waiting.fetch_sub(1, Ordering::AcqRel);
+        match r {
+            Ok(Ok(p)) => Ok(p),
+            _ => Err(Refusal::Timeout),
+        }
+    }
+
+    /// Requests waiting for a slot now.
+    pub fn queued(&self) -> usize {
+        self.waiting.load(Ordering::Relaxed)
+    }
+}
+
+/// `503` with a JSON error and `retry-after: 1`.
+pub fn over_capacity(msg: impl Into<String>) -> Response {
+    let mut r = json_error(StatusCode::SERVICE_UNAVAILABLE, msg);
+    r.headers_mut()
+        .insert(header::RETRY_AFTER, header::HeaderValue::from_static("1"));
+    r
+}
+
 /// A JSON error response `{"error": "..."}`.
 pub fn json_error(status: StatusCode, msg: impl Into<String>) -> Response {
     (
@@ -141,14 +208,15 @@ pub fn percent_decode(s: &str) -> String {
     String::from_utf8_lossy(&out).into_owned()
 }
 
-/// Middleware of `/api`: rate limit by address, then the token.
+/// Middleware of `/api`: rate limit by address, then the token, then admission.
 pub async fn guard(
     State(state): State<Arc<AppState>>,
     ConnectInfo(addr): ConnectInfo<SocketAddr>,
     req: Request,
     next: Next,
 ) -> Response {
-    if !state.limiter.allow(addr.ip()) {
+    let limited = state.config.rate_limit_loopback || !addr.ip().is_loopback();
+    if limited && !state.limiter.allow(addr.ip()) {
         state.counters.http_limited.fetch_add(1, Ordering::Relaxed);
         return json_error(StatusCode::TOO_MANY_REQUESTS, "rate limit exceeded");
     }
@@ -163,6 +231,16 @@ pub async fn guard(
             );
         }
     }
+    let _slot = match state.admission.admit().await {
+        Ok(p) => p,
+        Err(why) => {
+            state.counters.http_refused.fetch_add(1, Ordering::Relaxed);
+            return over_capacity(match why {
+                Refusal::QueueFull => "server over capacity: request queue full, retry",
+                Refusal::Timeout => "server over capacity: no slot within the queue timeout, retry",
+            });
+        }
+    };
     next.run(req).await
 }
 
@@ -185,6 +263,28 @@ mod tests {
         assert!(l.allow(a));
         assert!(!l.allow(a));
         assert!(l.allow(b));
+    }
+
+    #[tokio::test]
+    async fn admission_bounds_inflight_and_queue() {
+        let a = Arc::new(Admission::new(2, 1, Duration::from_millis(50)));
+        let p1 = a.admit().await.unwrap();
+        let _p2 = a.admit().await.unwrap();
+        // The third waits in the queue; a fourth finds the queue full.
+        let waiter = {
+            let a = a.clone();
+            tokio::spawn(async move { a.admit().await.map(drop) })
+        };
+        while a.queued() == 0 {
+            tokio::task::yield_now().await;
+        }
+        assert_eq!(a.admit().await.err(), Some(Refusal::QueueFull));
+        drop(p1);
+        assert_eq!(waiter.await.unwrap(), Ok(()));
+        // Nothing frees a slot now: a waiter times out.
+        let _p3 = a.admit().await.unwrap();
+        assert_eq!(a.admit().await.err(), Some(Refusal::Timeout));
+        assert_eq!(a.queued(), 0);
     }
 
     #[test]

@@ -131,6 +131,8 @@ async fn http_rate_limit_answers_429() {
     let (_scene, s) = near_server(ServerConfig {
         http_rate_per_s: 0.001,
         http_burst: 5.0,
+        // The test client is on loopback, which is not limited by default.
+        rate_limit_loopback: true,
         ..Default::default()
     })
     .await;

@@ -219,7 +219,7 @@ impl Doc<'_> {
 }
 
 /// Import a parsed CityJSON document.
-pub fn from_value(root: &Value, _opts: &ImportOptions) -> Result<Scene, ImportError> {
+pub fn from_value(root: &Value, opts: &ImportOptions) -> Result<Scene, ImportError> {
     if root.get("type").and_then(Value::as_str) != Some("CityJSON") {
         return Err(fmt_err(
             "not a CityJSON document (\"type\" is not \"CityJSON\")",
@@ -259,7 +259,7 @@ pub fn from_value(root: &Value, _opts: &ImportOptions) -> Result<Scene, ImportEr
         .get("CityObjects")
         .and_then(Value::as_object)
         .ok_or_else(|| fmt_err(format!("CityJSON {ver}: no \"CityObjects\" object")))?;
-    let mut diag = Diagnostics::default();
+    let mut diag = Diagnostics::new(opts.strict);
 
     // Pick the geometry of the highest LoD of every Building/BuildingPart.
     let mut chosen: BTreeMap<&str, (&Value, f64)> = BTreeMap::new();
@@ -297,20 +297,34 @@ pub fn from_value(root: &Value, _opts: &ImportOptions) -> Result<Scene, ImportEr
     let mut faces_of: BTreeMap<&str, Vec<Vec<Vec<DVec3>>>> = BTreeMap::new();
     let mut root_of: BTreeMap<&str, &str> = BTreeMap::new();
     let mut ground: BTreeMap<&str, f64> = BTreeMap::new();
-    for (&key, (g, _)) in &chosen {
-        let fs = faces(g, key)?;
-        let mut pts = Vec::with_capacity(fs.len());
-        for f in fs {
-            let mut rings = Vec::with_capacity(f.len());
-            for r in f {
-                let ring: Vec<DVec3> = r
-                    .iter()
-                    .map(|&i| doc.vertex(i, key))
-                    .collect::<Result<_, _>>()?;
-                rings.push(ring);
+    for (index, (&key, (g, _))) in chosen.iter().enumerate() {
+        let resolve = || -> Result<Vec<Vec<Vec<DVec3>>>, ImportError> {
+            let fs = faces(g, key)?;
+            let mut pts = Vec::with_capacity(fs.len());
+            for f in fs {
+                let mut rings = Vec::with_capacity(f.len());
+                for r in f {
+                    let ring: Vec<DVec3> = r
+                        .iter()
+                        .map(|&i| doc.vertex(i, key))
+                        .collect::<Result<_, _>>()?;
+                    rings.push(ring);
+                }
+                pts.push(rings);
             }
-            pts.push(rings);
-        }
+            Ok(pts)
+        };
+        // A broken city object is one unusable feature, not a broken file.
+        let pts = match resolve() {
+            Ok(pts) => pts,
+            Err(e) => {
+                diag.skip(ImportError::Feature {
+                    index,
+                    message: e.to_string(),
+                })?;
+                continue;
+            }
+        };
         // Walk up to the root Building (bounded: cycles in bad input stop).
         let mut r = key;
         for _ in 0..16 {
@@ -332,6 +346,9 @@ pub fn from_value(root: &Value, _opts: &ImportOptions) -> Result<Scene, ImportEr
 
     let mut objects = Vec::with_capacity(chosen.len());
     for (index, (&key, &(_, lod))) in chosen.iter().enumerate() {
+        if !faces_of.contains_key(key) {
+            continue;
+        }
         let g0 = ground.get(root_of[key]).copied().unwrap_or(0.0);
         let mut mesh = Mesh::default();
         let mut degenerate = 0usize;
@@ -371,10 +388,11 @@ pub fn from_value(root: &Value, _opts: &ImportOptions) -> Result<Scene, ImportEr
             );
         }
         if mesh.triangles.is_empty() {
-            return Err(ImportError::Feature {
+            diag.skip(ImportError::Feature {
                 index,
                 message: format!("city object '{key}': no usable face"),
-            });
+            })?;
+            continue;
         }
         let name = Some(key.to_string());
         if lod < 2.0 {
@@ -394,10 +412,11 @@ pub fn from_value(root: &Value, _opts: &ImportOptions) -> Result<Scene, ImportEr
             let footprint = boolean::union(&tris);
             let (base, top) = (b.min.z.max(0.0), b.max.z);
             if footprint.is_empty() || top <= base {
-                return Err(ImportError::Feature {
+                diag.skip(ImportError::Feature {
                     index,
                     message: format!("city object '{key}': LoD{lod} geometry has no volume"),
-                });
+                })?;
+                continue;
             }
             objects.push(Object::blocks(
                 name,
@@ -420,7 +439,7 @@ pub fn from_value(root: &Value, _opts: &ImportOptions) -> Result<Scene, ImportEr
         }
     }
     if objects.is_empty() {
-        return Err(fmt_err(format!(
+        return Err(diag.nothing_left(format!(
             "empty scene: no Building or BuildingPart with geometry among {} city object(s)",
             objs.len()
         )));

@@ -102,18 +102,23 @@ pub fn from_value(root: &Value, opts: &ImportOptions) -> Result<Scene, ImportErr
         .ok_or_else(|| {
             ImportError::Format("FeatureCollection without a \"features\" array".into())
         })?;
-    let mut diag = Diagnostics::default();
+    let mut diag = Diagnostics::new(opts.strict);
     let mut raw = Vec::with_capacity(features.len());
     for (index, f) in features.iter().enumerate() {
-        if let Some(r) = read_feature(f, index, &mut diag)? {
-            raw.push(r);
+        match read_feature(f, index, &mut diag) {
+            Ok(Some(r)) => raw.push(r),
+            Ok(None) => {}
+            Err(e) => diag.skip(e)?,
         }
     }
-    if raw.is_empty() {
-        return Err(ImportError::Format(format!(
+    let empty = || {
+        format!(
             "empty scene: no Polygon or MultiPolygon feature among {} feature(s)",
             features.len()
-        )));
+        )
+    };
+    if raw.is_empty() {
+        return Err(diag.nothing_left(empty()));
     }
 
     let bbox = raw
@@ -148,19 +153,23 @@ pub fn from_value(root: &Value, opts: &ImportOptions) -> Result<Scene, ImportErr
     }
 
     let mut objects = Vec::with_capacity(raw.len());
-    for r in raw {
+    'features: for r in raw {
         let mut polys: Vec<Polygon> = Vec::new();
         for rings in r.polygons {
-            polys.extend(
-                validate::polygon(rings, true, r.index, &mut diag)
-                    .map_err(|m| feature_err(r.index, m))?,
-            );
+            match validate::polygon(rings, true, r.index, &mut diag) {
+                Ok(p) => polys.extend(p),
+                Err(m) => {
+                    diag.skip(feature_err(r.index, m))?;
+                    continue 'features;
+                }
+            }
         }
         if polys.is_empty() {
-            return Err(feature_err(
+            diag.skip(feature_err(
                 r.index,
                 "no valid polygon left (all rings degenerate or zero-area)",
-            ));
+            ))?;
+            continue;
         }
         objects.push(match r.extent {
             Extent::Flat => Object::flat(r.name, polys),
@@ -172,6 +181,9 @@ pub fn from_value(root: &Value, opts: &ImportOptions) -> Result<Scene, ImportErr
                     .collect(),
             ),
         });
+    }
+    if objects.is_empty() {
+        return Err(diag.nothing_left(empty()));
     }
     let mut scene = Scene::from_objects(objects);
     scene.warnings = diag.warnings;
@@ -317,11 +329,31 @@ mod tests {
                 "out of range",
             ),
         ];
+        let strict = ImportOptions {
+            strict: true,
+            ..ImportOptions::default()
+        };
         for (f, what) in cases {
-            let e = load(&fc(&[feat("{\"height\":3}", SQ), f])).unwrap_err();
+            let text = fc(&[feat("{\"height\":3}", SQ), f.clone()]);
+            let e = parse(text.as_bytes(), &strict).unwrap_err();
             let msg = e.to_string();
             assert!(msg.starts_with("feature 1:"), "{msg}");
             assert!(msg.contains(what), "{msg} lacks {what}");
+            // By default the bad feature is skipped with a warning naming it, and the
+            // good one loads.
+            let s = load(&text).unwrap();
+            assert_eq!(s.len(), 1);
+            let w: Vec<_> = s
+                .warnings
+                .iter()
+                .filter(|w| w.kind == "skipped-feature")
+                .collect();
+            assert_eq!(w.len(), 1, "{:?}", s.warnings);
+            assert_eq!(w[0].feature, Some(1));
+            assert!(w[0].message.contains(what), "{}", w[0].message);
+            // With nothing else left, the rejection is the error.
+            let msg = load(&fc(&[f])).unwrap_err().to_string();
+            assert!(msg.starts_with("feature 0:") && msg.contains(what), "{msg}");
         }
     }
 
@@ -353,6 +385,7 @@ mod tests {
             fc(&[feat("{\"height\":10}", c)]).as_bytes(),
             &ImportOptions {
                 crs: Crs::Projected,
+                ..ImportOptions::default()
             },
         );
         assert!(forced.is_err());

@@ -10,7 +10,7 @@
 
 use super::obj::{mesh_object, y_up_to_z_up};
 use super::validate::Diagnostics;
-use super::ImportError;
+use super::{ImportError, ImportOptions};
 use crate::{Mesh, Scene};
 use glam::DMat4;
 use gltf::mesh::Mode;
@@ -22,10 +22,14 @@ fn err(m: impl std::fmt::Display) -> ImportError {
 }
 
 /// Parse a .gltf (JSON; external buffers relative to `base`) or .glb.
-pub fn parse(bytes: &[u8], base: Option<&Path>) -> Result<Scene, ImportError> {
+pub fn parse(
+    bytes: &[u8],
+    base: Option<&Path>,
+    import: &ImportOptions,
+) -> Result<Scene, ImportError> {
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(bytes).map_err(err)?;
     let buffers = gltf::import_buffers(&document, base, blob).map_err(err)?;
-    let mut diag = Diagnostics::default();
+    let mut diag = Diagnostics::new(import.strict);
     let mut objects = Vec::new();
     let roots: Vec<gltf::Node> = match document
         .default_scene()
@@ -52,6 +56,7 @@ pub fn parse(bytes: &[u8], base: Option<&Path>) -> Result<Scene, ImportError> {
         }
         let Some(gmesh) = node.mesh() else { continue };
         let mut mesh = Mesh::default();
+        let mut rejected = false;
         for prim in gmesh.primitives() {
             let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
             let Some(pos) = reader.read_positions() else {
@@ -72,13 +77,15 @@ pub fn parse(bytes: &[u8], base: Option<&Path>) -> Result<Scene, ImportError> {
                 None => (0..n).collect(),
             };
             if let Some(bad) = idx.iter().find(|&&i| i >= n) {
-                return Err(ImportError::Feature {
+                diag.skip(ImportError::Feature {
                     index,
                     message: format!(
                         "index {bad} out of range ({n} vertices) in node {:?}",
                         node.name()
                     ),
-                });
+                })?;
+                rejected = true;
+                break;
             }
             let tris: Vec<[u32; 3]> = match prim.mode() {
                 Mode::Triangles => idx.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
@@ -106,13 +113,17 @@ pub fn parse(bytes: &[u8], base: Option<&Path>) -> Result<Scene, ImportError> {
             mesh.triangles
                 .extend(tris.iter().map(|t| t.map(|i| i + off)));
         }
-        if let Some(o) = mesh_object(node.name().map(str::to_string), mesh, index, &mut diag)? {
-            objects.push(o);
+        if !rejected {
+            match mesh_object(node.name().map(str::to_string), mesh, index, &mut diag) {
+                Ok(Some(o)) => objects.push(o),
+                Ok(None) => {}
+                Err(e) => diag.skip(e)?,
+            }
         }
         index += 1;
     }
     if objects.is_empty() {
-        return Err(err("empty scene: no node with a triangle mesh"));
+        return Err(diag.nothing_left("invalid glTF: empty scene: no node with a triangle mesh"));
     }
     let mut scene = Scene::from_objects(objects);
     scene.warnings = diag.warnings;

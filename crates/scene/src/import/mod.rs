@@ -35,6 +35,9 @@ pub enum Crs {
 #[derive(Clone, Debug, Default)]
 pub struct ImportOptions {
     pub crs: Crs,
+    /// Abort on the first feature that cannot be used instead of skipping it with a
+    /// counted `skipped-feature` warning (see [`validate::Diagnostics`]).
+    pub strict: bool,
 }
 
 /// A problem that makes an input unusable, naming the feature and what is wrong.
@@ -79,9 +82,9 @@ pub fn load(path: &Path, opts: &ImportOptions) -> Result<Scene, ImportError> {
             }
         }
         "zip" => cityjson::parse_zip(&read(path)?, opts),
-        "obj" => obj::parse(&read(path)?),
+        "obj" => obj::parse(&read(path)?, opts),
         "pbf" => osm::parse(&read(path)?, opts),
-        "gltf" | "glb" => gltf::parse(&read(path)?, path.parent()),
+        "gltf" | "glb" => gltf::parse(&read(path)?, path.parent(), opts),
         _ => Err(ImportError::Unsupported(path.display().to_string())),
     }
 }

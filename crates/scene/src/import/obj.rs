@@ -7,7 +7,7 @@
 //! [`super::mesh_bounds`].
 
 use super::validate::Diagnostics;
-use super::{mesh_bounds, ImportError};
+use super::{mesh_bounds, ImportError, ImportOptions};
 use crate::{Mesh, Object, Scene};
 use sightline_geom::DVec3;
 
@@ -63,7 +63,7 @@ pub fn mesh_object(
 }
 
 /// Parse OBJ text.
-pub fn parse(bytes: &[u8]) -> Result<Scene, ImportError> {
+pub fn parse(bytes: &[u8], import: &ImportOptions) -> Result<Scene, ImportError> {
     // Other tobj feature sets add fields: keep the struct update.
     #[allow(clippy::needless_update)]
     let opts = tobj::LoadOptions {
@@ -76,7 +76,7 @@ pub fn parse(bytes: &[u8]) -> Result<Scene, ImportError> {
     let (models, _) =
         tobj::load_obj_buf(&mut reader, &opts, |_| Ok((Vec::new(), Default::default())))
             .map_err(|e| ImportError::Format(format!("invalid OBJ: {e}")))?;
-    let mut diag = Diagnostics::default();
+    let mut diag = Diagnostics::new(import.strict);
     let mut objects = Vec::new();
     for (index, m) in models.into_iter().enumerate() {
         let vertices: Vec<DVec3> = m
@@ -92,22 +92,18 @@ pub fn parse(bytes: &[u8]) -> Result<Scene, ImportError> {
             .map(|t| [t[0], t[1], t[2]])
             .collect();
         let name = (!m.name.is_empty() && m.name != "unnamed_object").then(|| m.name.clone());
-        if let Some(o) = mesh_object(
-            name,
-            Mesh {
-                vertices,
-                triangles,
-            },
-            index,
-            &mut diag,
-        )? {
-            objects.push(o);
+        let mesh = Mesh {
+            vertices,
+            triangles,
+        };
+        match mesh_object(name, mesh, index, &mut diag) {
+            Ok(Some(o)) => objects.push(o),
+            Ok(None) => {}
+            Err(e) => diag.skip(e)?,
         }
     }
     if objects.is_empty() {
-        return Err(ImportError::Format(
-            "empty scene: the OBJ file has no faces".into(),
-        ));
+        return Err(diag.nothing_left("empty scene: the OBJ file has no faces"));
     }
     let mut scene = Scene::from_objects(objects);
     scene.warnings = diag.warnings;

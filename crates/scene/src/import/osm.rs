@@ -77,7 +77,7 @@ fn assemble(mut ways: Vec<Vec<i64>>) -> (Vec<Vec<i64>>, bool) {
 }
 
 /// Parse `.osm.pbf` bytes.
-pub fn parse(bytes: &[u8], _opts: &ImportOptions) -> Result<Scene, ImportError> {
+pub fn parse(bytes: &[u8], opts: &ImportOptions) -> Result<Scene, ImportError> {
     let mut nodes: HashMap<i64, DVec2> = HashMap::new();
     let mut way_refs: HashMap<i64, Vec<i64>> = HashMap::new();
     let mut buildings: Vec<Building> = Vec::new();
@@ -129,7 +129,7 @@ pub fn parse(bytes: &[u8], _opts: &ImportOptions) -> Result<Scene, ImportError> 
         })
         .map_err(|e| ImportError::Format(format!("invalid OSM PBF: {e}")))?;
 
-    let mut diag = Diagnostics::default();
+    let mut diag = Diagnostics::new(opts.strict);
     for (rel, members) in relations.iter_mut().zip(rel_members) {
         let (mut outer, mut inner) = (Vec::new(), Vec::new());
         for (id, role) in members {
@@ -162,45 +162,58 @@ pub fn parse(bytes: &[u8], _opts: &ImportOptions) -> Result<Scene, ImportError> 
     let mut resolved: Vec<(usize, Vec<Vec<Vec<DVec2>>>)> = Vec::new();
     let mut bbox = Aabb2::EMPTY;
     for (index, b) in buildings.iter().enumerate() {
-        let ring = |ids: &Vec<i64>| -> Result<Vec<DVec2>, ImportError> {
-            ids.iter()
-                .map(|id| {
-                    nodes.get(id).copied().ok_or_else(|| ImportError::Feature {
-                        index,
-                        message: format!("{}: node {id} is missing from the file", b.name),
+        // Extracts cut ways at their border and real data has broken parts: a building
+        // that cannot be resolved is skipped (counted), the rest of the city loads.
+        let resolve = || -> Result<Vec<Vec<Vec<DVec2>>>, ImportError> {
+            let ring = |ids: &Vec<i64>| -> Result<Vec<DVec2>, ImportError> {
+                ids.iter()
+                    .map(|id| {
+                        nodes.get(id).copied().ok_or_else(|| ImportError::Feature {
+                            index,
+                            message: format!("{}: node {id} is missing from the file", b.name),
+                        })
                     })
-                })
-                .collect()
-        };
-        let inners: Vec<Vec<DVec2>> = b.inners.iter().map(ring).collect::<Result<_, _>>()?;
-        let mut polys = Vec::new();
-        for o in &b.outers {
-            let o = ring(o)?;
-            let probe = Polygon::new(o.clone(), vec![]);
-            let mut rings = vec![o];
-            rings.extend(
-                inners
-                    .iter()
-                    .filter(|h| h.iter().any(|p| probe.contains(*p)))
-                    .cloned(),
-            );
-            polys.push(rings);
-        }
-        for p in polys.iter().flatten().flatten() {
-            if !(p.x.abs() <= 180.0 && p.y.abs() <= 90.0) {
+                    .collect()
+            };
+            let inners: Vec<Vec<DVec2>> = b.inners.iter().map(ring).collect::<Result<_, _>>()?;
+            let mut polys = Vec::new();
+            for o in &b.outers {
+                let o = ring(o)?;
+                let probe = Polygon::new(o.clone(), vec![]);
+                let mut rings = vec![o];
+                rings.extend(
+                    inners
+                        .iter()
+                        .filter(|h| h.iter().any(|p| probe.contains(*p)))
+                        .cloned(),
+                );
+                polys.push(rings);
+            }
+            if let Some(p) = polys
+                .iter()
+                .flatten()
+                .flatten()
+                .find(|p| !(p.x.abs() <= 180.0 && p.y.abs() <= 90.0))
+            {
                 return Err(ImportError::Feature {
                     index,
                     message: format!("{}: lon/lat {p} out of range", b.name),
                 });
             }
-            bbox = bbox.grow(*p);
+            Ok(polys)
+        };
+        match resolve() {
+            Ok(polys) => {
+                for p in polys.iter().flatten().flatten() {
+                    bbox = bbox.grow(*p);
+                }
+                resolved.push((index, polys));
+            }
+            Err(e) => diag.skip(e)?,
         }
-        resolved.push((index, polys));
     }
     if bbox.is_empty() {
-        return Err(ImportError::Format(
-            "empty scene: no building way or multipolygon in the file".into(),
-        ));
+        return Err(diag.nothing_left("empty scene: no building way or multipolygon in the file"));
     }
     let proj = LocalTransverseMercator::centred_on(bbox.min, bbox.max);
     let mut objects = Vec::new();
@@ -212,24 +225,35 @@ pub fn parse(bytes: &[u8], _opts: &ImportOptions) -> Result<Scene, ImportError> 
             levels: tag_num(&b.tags, "building:levels"),
             min_level: tag_num(&b.tags, "building:min_level"),
         };
-        let extent = height::resolve(&hp, index, &mut diag).map_err(|m| ImportError::Feature {
+        let rejected = |m: String| ImportError::Feature {
             index,
             message: format!("{}: {m}", b.name),
-        })?;
+        };
+        let extent = match height::resolve(&hp, index, &mut diag) {
+            Ok(e) => e,
+            Err(m) => {
+                diag.skip(rejected(m))?;
+                continue;
+            }
+        };
         let mut footprints = Vec::new();
+        let mut broken = false;
         for rings in polys {
             let rings = rings
                 .into_iter()
                 .map(|r| r.into_iter().map(|p| proj.project(p.x, p.y)).collect())
                 .collect();
-            footprints.extend(
-                validate::polygon(rings, true, index, &mut diag).map_err(|m| {
-                    ImportError::Feature {
-                        index,
-                        message: format!("{}: {m}", b.name),
-                    }
-                })?,
-            );
+            match validate::polygon(rings, true, index, &mut diag) {
+                Ok(f) => footprints.extend(f),
+                Err(m) => {
+                    diag.skip(rejected(m))?;
+                    broken = true;
+                    break;
+                }
+            }
+        }
+        if broken {
+            continue;
         }
         if footprints.is_empty() {
             diag.warn(
@@ -252,9 +276,7 @@ pub fn parse(bytes: &[u8], _opts: &ImportOptions) -> Result<Scene, ImportError> 
         });
     }
     if objects.is_empty() {
-        return Err(ImportError::Format(
-            "empty scene: no valid building footprint".into(),
-        ));
+        return Err(diag.nothing_left("empty scene: no valid building footprint"));
     }
     let mut scene = Scene::from_objects(objects);
     scene.warnings = diag.warnings;

@@ -28,13 +28,70 @@ pub const ZERO_AREA_M2: f64 = 1e-6;
 /// Rings with less area than this are dropped as tiny.
 pub const TINY_AREA_M2: f64 = 1e-2;
 
-/// Collects counted warnings for one input.
+/// Collects counted warnings for one input, and decides what a feature that cannot be
+/// used does to the whole input.
+///
+/// Real data always holds a few broken features (an OSM part whose `min_height` is above
+/// its `height`, a way cut at the extract's border). By default such a feature is
+/// *skipped* with a counted `skipped-feature` warning naming it, and the rest of the city
+/// loads; in strict mode ([`super::ImportOptions::strict`]) its error aborts the import.
+/// When nothing usable is left, the first rejection is the error.
 #[derive(Debug, Default)]
 pub struct Diagnostics {
     pub warnings: Vec<Warning>,
+    strict: bool,
+    skipped: usize,
+    first_rejection: Option<(usize, String)>,
 }
 
 impl Diagnostics {
+    /// Diagnostics that abort on the first unusable feature when `strict`.
+    pub fn new(strict: bool) -> Self {
+        Diagnostics {
+            strict,
+            ..Diagnostics::default()
+        }
+    }
+
+    /// Skip an unusable feature (a counted `skipped-feature` warning), or, in strict mode
+    /// or for an error that is not about one feature, return the error.
+    pub fn skip(&mut self, err: super::ImportError) -> Result<(), super::ImportError> {
+        let super::ImportError::Feature { index, message } = err else {
+            return Err(err);
+        };
+        if self.strict {
+            return Err(super::ImportError::Feature { index, message });
+        }
+        self.skipped += 1;
+        self.warn(
+            "skipped-feature",
+            Some(index),
+            format!("feature {index} skipped: {message}"),
+        );
+        self.first_rejection.get_or_insert((index, message));
+        Ok(())
+    }
+
+    /// Features skipped so far.
+    pub fn skipped(&self) -> usize {
+        self.skipped
+    }
+
+    /// The error of an input with nothing usable left: the first rejected feature's
+    /// error when some were rejected, else `empty` (a [`super::ImportError::Format`]).
+    pub fn nothing_left(&self, empty: impl Into<String>) -> super::ImportError {
+        match &self.first_rejection {
+            Some((index, message)) => super::ImportError::Feature {
+                index: *index,
+                message: format!(
+                    "{message} (nothing left to load: {} feature(s) rejected)",
+                    self.skipped
+                ),
+            },
+            None => super::ImportError::Format(empty.into()),
+        }
+    }
+
     pub fn warn(&mut self, kind: &str, feature: Option<usize>, message: impl Into<String>) {
         self.warnings.push(Warning {
             kind: kind.to_string(),
