@@ -68,18 +68,6 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
-/// A tiny deterministic generator (no dependency needed for a few random delays).
-struct Lcg(u64);
-impl Lcg {
-    fn next_f64(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 #[test]
 fn sigkill_at_random_moments_then_resume_is_byte_identical() {
     let dir = tempfile::tempdir().unwrap();
@@ -101,7 +89,7 @@ fn sigkill_at_random_moments_then_resume_is_byte_identical() {
 
     let out = dir.path().join("killed.pvs");
     let journal = dir.path().join("killed.pvs.journal");
-    let mut rng = Lcg(0x5eed);
+    let mut rng = sightline_stats::Rng::new(0x5eed);
     let (mut kills, mut kills_with_journal) = (0, 0);
     // Kills land at a random moment of a full build's time, scaled down whenever a run
     // finishes before its kill (a loaded machine makes the first timing unreliable): then
@@ -129,7 +117,7 @@ fn sigkill_at_random_moments_then_resume_is_byte_identical() {
         // Up to ten kills at random moments (a resumed run may finish first); then one
         // run goes to the end.
         if kills < 10 {
-            std::thread::sleep(full_time.mul_f64(scale * (0.05 + 0.55 * rng.next_f64())));
+            std::thread::sleep(full_time.mul_f64(scale * (0.05 + 0.55 * rng.f64())));
         } else {
             let out = child.wait_with_output().unwrap();
             assert!(

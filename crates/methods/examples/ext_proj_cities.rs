@@ -44,14 +44,6 @@ fn read_cache(path: &str, n: usize) -> Option<Vec<Vec<u32>>> {
     (lines.len() == n).then(|| lines.iter().map(|l| ids(l)).collect())
 }
 
-fn quantile(v: &[f64], q: f64) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    s.get(((s.len() as f64 - 1.0) * q).round() as usize)
-        .copied()
-        .unwrap_or(0.0)
-}
-
 /// A variant: `default`, or `key=value` settings joined by `+` over the defaults
 /// (`res`, `improved` 0/1, `ext`, `sa` solid angle, `cap` max occluders, `ppd`,
 /// `cands`, `splits`, `budget` (none = off), `minm`).
@@ -150,12 +142,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!(
             "{stem} {name:>10}: cells {} missed {missed} over median {:.2} p90 {:.2} hidden {hidden:.1} % mean PVS {mean:.1} ms/cell {:.0}",
             pvs.len(),
-            quantile(&r, 0.5),
-            quantile(&r, 0.9),
+            sightline_stats::quantile(&r, 0.5),
+            sightline_stats::quantile(&r, 0.9),
             ms,
         );
     };
-    print("erosion", &erosion, quantile(&erosion_ms, 0.5));
+    print(
+        "erosion",
+        &erosion,
+        sightline_stats::quantile(&erosion_ms, 0.5),
+    );
     let variants = std::env::var("EXTPROJ_VARIANTS").unwrap_or_else(|_| "default".into());
     for name in variants.split(',') {
         let Some(params) = variant(name.trim()) else {
@@ -170,7 +166,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             pvs.push(m.pvs(c).unwrap_or_else(|_| (0..n_obj as u32).collect()));
             ms.push(t.elapsed().as_secs_f64() * 1e3);
         }
-        print(name.trim(), &pvs, quantile(&ms, 0.5));
+        print(name.trim(), &pvs, sightline_stats::quantile(&ms, 0.5));
         if std::env::var("EXTPROJ_DIAG").is_ok_and(|v| v == "2") {
             let (mut off, mut near, mut far, mut total) = (0usize, 0usize, 0usize, 0usize);
             for (k, (p, e)) in pvs.iter().zip(&erosion).enumerate() {

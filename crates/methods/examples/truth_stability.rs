@@ -60,14 +60,6 @@ fn cpu_s() -> f64 {
     (ticks(11) + ticks(12)) / 100.0
 }
 
-fn median(v: &mut [f64]) -> f64 {
-    if v.is_empty() {
-        return 0.0;
-    }
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let usage = "usage: truth_stability SCENE CELLS.json [COUNT] [SAMPLES] [RESOLUTION] [RAYS]";
@@ -179,9 +171,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!();
     println!(
         "base: truth ms/cell median {:.0}, max {:.0}; CPU ms/cell median {:.0}, max {:.0}",
-        median(&mut base_ms.clone()),
+        sightline_stats::median(&base_ms),
         base_ms.iter().copied().fold(0.0, f64::max),
-        median(&mut base_cpu.clone()),
+        sightline_stats::median(&base_cpu),
         base_cpu.iter().copied().fold(0.0, f64::max)
     );
     for (k, (name, _)) in variants.iter().enumerate() {
@@ -189,8 +181,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mean = changes[k].iter().sum::<f64>() / changes[k].len().max(1) as f64;
         println!(
             "{name}: VS change median {:.2} %, mean {mean:.2} %, max {max:.2} %; ms/cell median {:.0}",
-            median(&mut changes[k]),
-            median(&mut var_ms[k])
+            sightline_stats::median(&changes[k]),
+            sightline_stats::median(&var_ms[k])
         );
     }
     Ok(())

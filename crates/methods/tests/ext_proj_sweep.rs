@@ -8,18 +8,8 @@ use sightline_geom::{Aabb3, DVec2, DVec3, Polygon, ViewCell};
 use sightline_methods::ext_proj::{ExtProj, Params};
 use sightline_methods::VisibilityMethod;
 use sightline_scene::{Mesh, Object, Prism, Scene};
+use sightline_stats::Rng;
 use std::sync::Arc;
-
-/// A deterministic pseudo-random stream (xorshift) for the fixture.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
 
 /// A tree: a trunk prism (its inner bound) and `leaves` small triangles in a crown.
 fn tree(c: DVec2, leaves: usize, rng: &mut Rng) -> Object {
@@ -33,12 +23,12 @@ fn tree(c: DVec2, leaves: usize, rng: &mut Rng) -> Object {
     }
     for _ in 0..leaves {
         let p = DVec3::new(
-            c.x + (rng.next() - 0.5) * 4.0,
-            c.y + (rng.next() - 0.5) * 4.0,
-            1.0 + rng.next() * 5.0,
+            c.x + (rng.f64() - 0.5) * 4.0,
+            c.y + (rng.f64() - 0.5) * 4.0,
+            1.0 + rng.f64() * 5.0,
         );
-        let a = DVec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5) * 3.5;
-        let b = DVec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5) * 3.5;
+        let a = DVec3::new(rng.f64() - 0.5, rng.f64() - 0.5, rng.f64() - 0.5) * 3.5;
+        let b = DVec3::new(rng.f64() - 0.5, rng.f64() - 0.5, rng.f64() - 0.5) * 3.5;
         let base = m.vertices.len() as u32;
         m.vertices.extend([p, p + a, p + b]);
         m.triangles.push([base, base + 1, base + 2]);
@@ -57,7 +47,7 @@ fn pvs(scene: &Arc<Scene>, params: Params, c: &ViewCell) -> Vec<u32> {
 }
 
 fn forest(rows: usize, cols: usize, leaves: usize) -> Scene {
-    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let mut rng = Rng::new(0x9e37_79b9_7f4a_7c15);
     let mut objs = Vec::new();
     for i in 0..rows {
         for j in 0..cols {

@@ -50,10 +50,6 @@ impl VisibilityMethod for Synthetic {
     }
 }
 
-fn percentile(sorted: &[f64], p: f64) -> f64 {
-    sorted[((sorted.len() - 1) as f64 * p).round() as usize]
-}
-
 fn main() {
     let side: usize = std::env::var("SIGHTLINE_BENCH_SIDE")
         .ok()
@@ -181,8 +177,8 @@ fn main() {
     times.sort_by(f64::total_cmp);
     println!(
         "query (random points, warm file): p50 {:.1} µs, p99 {:.1} µs, max {:.1} µs",
-        percentile(&times, 0.5),
-        percentile(&times, 0.99),
+        sightline_stats::quantile_sorted(&times, 0.5),
+        sightline_stats::quantile_sorted(&times, 0.99),
         times[times.len() - 1]
     );
     // A walk: consecutive points 2 m apart (the server's pattern).
@@ -198,7 +194,7 @@ fn main() {
     times.sort_by(f64::total_cmp);
     println!(
         "query (walk): p50 {:.1} µs, p99 {:.1} µs",
-        percentile(&times, 0.5),
-        percentile(&times, 0.99)
+        sightline_stats::quantile_sorted(&times, 0.5),
+        sightline_stats::quantile_sorted(&times, 0.99)
     );
 }

@@ -23,7 +23,7 @@ fn cpu_ns() -> u64 {
 /// Median CPU seconds of one call of `f`. The counter advances at scheduler ticks
 /// only, so each pass repeats `f` for at least 0.25 s of wall time.
 fn median_s(mut f: impl FnMut(), repeats: usize) -> f64 {
-    let mut t: Vec<f64> = (0..repeats)
+    let t: Vec<f64> = (0..repeats)
         .map(|_| {
             let (a, w) = (cpu_ns(), std::time::Instant::now());
             let mut n = 0u32;
@@ -34,8 +34,7 @@ fn median_s(mut f: impl FnMut(), repeats: usize) -> f64 {
             (cpu_ns() - a) as f64 * 1e-9 / n as f64
         })
         .collect();
-    t.sort_by(f64::total_cmp);
-    t[t.len() / 2]
+    sightline_stats::median(&t)
 }
 
 fn main() {

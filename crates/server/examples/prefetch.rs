@@ -81,16 +81,6 @@ fn args() -> Result<Args, String> {
     Ok(a)
 }
 
-struct Rng(u64);
-impl Rng {
-    fn f(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 /// Job priorities, as [`sightline_server::cache::Priority`].
 const DEMAND: u8 = 0;
 const AHEAD: u8 = 1;
@@ -236,11 +226,11 @@ fn main() {
             std::process::exit(1);
         }
     };
-    let mut rng = Rng(a.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
+    let mut rng = sightline_stats::Rng::new(a.seed);
     let lo = DVec2::from_array(grid.origin);
     let hi = grid.max();
-    let mut p = lo + (hi - lo) * DVec2::new(0.3 + 0.4 * rng.f(), 0.3 + 0.4 * rng.f());
-    let mut heading = rng.f() * std::f64::consts::TAU;
+    let mut p = lo + (hi - lo) * DVec2::new(0.3 + 0.4 * rng.f64(), 0.3 + 0.4 * rng.f64());
+    let mut heading = rng.f64() * std::f64::consts::TAU;
     let mut sim = Sim {
         method: method.as_ref(),
         grid: &grid,
@@ -264,13 +254,13 @@ fn main() {
     let (mut changes, mut hits, mut waits) = (0usize, 0usize, vec![]);
     let wall = Instant::now();
     while changes < a.changes {
-        if rng.f() < 0.02 {
-            heading += (rng.f() - 0.5) * std::f64::consts::PI;
+        if rng.f64() < 0.02 {
+            heading += (rng.f64() - 0.5) * std::f64::consts::PI;
         }
         let dir = DVec2::new(heading.cos(), heading.sin());
         let mut q = p + dir * a.speed * dt;
         if q.x < lo.x || q.y < lo.y || q.x > hi.x || q.y > hi.y {
-            heading += std::f64::consts::PI * (0.5 + rng.f());
+            heading += std::f64::consts::PI * (0.5 + rng.f64());
             q = p;
         }
         t += dt;

@@ -11,6 +11,7 @@ mod common;
 use common::*;
 use sightline_server::cache::CacheConfig;
 use sightline_server::ServerConfig;
+use sightline_stats::quantile_sorted as quantile;
 use std::net::SocketAddr;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -68,10 +69,6 @@ async fn held_open(addr: SocketAddr, prefix: &'static [u8], drip: Option<Duratio
             return f64::INFINITY;
         }
     }
-}
-
-fn quantile(sorted: &[f64], q: f64) -> f64 {
-    sorted[((sorted.len() - 1) as f64 * q).round() as usize]
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -4,7 +4,6 @@
 use super::machine::Machine;
 use super::plots::{line_chart, Scale, Series};
 use super::report::{Report, Table};
-use super::stats::{loglog_slope, mean, median, quantile};
 use anyhow::Context;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -12,6 +11,7 @@ use sightline_geom::ViewCell;
 use sightline_methods::check::{TruthOptions, TruthScene};
 use sightline_methods::{create, MethodError, MethodOptions, VisibilityMethod};
 use sightline_scene::Scene;
+use sightline_stats::{loglog_slope, mean, median, quantile};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

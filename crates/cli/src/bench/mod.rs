@@ -10,6 +10,5 @@ mod experiments;
 mod machine;
 mod plots;
 mod report;
-pub mod stats;
 
 pub use experiments::{run, Suite};

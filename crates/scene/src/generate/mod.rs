@@ -42,59 +42,8 @@ pub(crate) fn snap_cm(v: f64) -> f64 {
     (v * 100.0).round() / 100.0
 }
 
-/// SplitMix64 (Steele, Lea & Flood 2014): a tiny, fast, statistically sound PRNG.
-/// Own implementation so that scenes never change with a dependency's version.
-#[derive(Clone, Debug)]
-pub(crate) struct Rng(u64);
-
-impl Rng {
-    /// An independent stream for sub-part `index` of a generation seeded by `seed`
-    /// (e.g. one per block), so parts can be generated in parallel, in any order.
-    pub fn derive(seed: u64, index: u64) -> Self {
-        let mut r = Rng(seed ^ index.wrapping_mul(0xD1B5_4A32_D192_ED03));
-        r.next_u64();
-        Rng(r.next_u64() ^ index)
-    }
-
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1).
-    pub fn f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-
-    /// Uniform in [lo, hi).
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.f64()
-    }
-
-    /// Uniform integer in [0, n); `n > 0`.
-    pub fn below(&mut self, n: usize) -> usize {
-        ((self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64) * n as f64) as usize % n
-    }
-
-    pub fn chance(&mut self, p: f64) -> bool {
-        self.f64() < p
-    }
-
-    /// Standard normal variate (Box–Muller).
-    pub fn normal(&mut self) -> f64 {
-        let u1 = 1.0 - self.f64(); // (0, 1]
-        let u2 = self.f64();
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    }
-
-    /// Log-normal variate with the given median and log-space standard deviation.
-    pub fn lognormal(&mut self, median: f64, sigma: f64) -> f64 {
-        median * (sigma * self.normal()).exp()
-    }
-}
+/// The generators' random streams (SplitMix64, [`sightline_stats::Rng`]).
+pub(crate) use sightline_stats::Rng;
 
 #[cfg(test)]
 mod tests {

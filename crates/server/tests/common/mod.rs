@@ -271,17 +271,6 @@ pub struct ClientReport {
     pub errors: Vec<String>,
 }
 
-/// xorshift: the paths are random but reproducible per client.
-pub struct Rng(pub u64);
-impl Rng {
-    pub fn f(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 /// How a load-test walker moves.
 #[derive(Clone, Copy, Debug)]
 pub struct Walk {
@@ -312,9 +301,9 @@ pub async fn walker(addr: SocketAddr, seed: u64, walk: Walk) -> ClientReport {
     let sent_w = sent.clone();
     let [x0, y0, x1, y1] = walk.area;
     let writer = tokio::spawn(async move {
-        let mut rng = Rng(seed.wrapping_mul(2654435761).wrapping_add(1));
-        let (mut x, mut y) = (x0 + rng.f() * (x1 - x0), y0 + rng.f() * (y1 - y0));
-        let mut a = rng.f() * std::f64::consts::TAU;
+        let mut rng = sightline_stats::Rng::new(seed);
+        let (mut x, mut y) = (x0 + rng.f64() * (x1 - x0), y0 + rng.f64() * (y1 - y0));
+        let mut a = rng.f64() * std::f64::consts::TAU;
         let mut seq = 0u64;
         let step_s = 1.0 / walk.hz.max(0.1);
         let mut tick = tokio::time::interval(std::time::Duration::from_secs_f64(step_s));
@@ -324,8 +313,8 @@ pub async fn walker(addr: SocketAddr, seed: u64, walk: Walk) -> ClientReport {
         }
         while Instant::now() < walk.until {
             tick.tick().await;
-            if rng.f() < 0.5 * step_s {
-                a += (rng.f() - 0.5) * 2.0;
+            if rng.f64() < 0.5 * step_s {
+                a += (rng.f64() - 0.5) * 2.0;
             }
             x += a.cos() * walk.speed_m_s * step_s;
             y += a.sin() * walk.speed_m_s * step_s;

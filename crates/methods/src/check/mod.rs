@@ -1,0 +1,250 @@
+//! Ground-truth visible sets and the checking of methods against them (SPEC §3).
+//!
+//! The **visible set (VS)** of a cell is estimated by dense sampling (survey §7.6,
+//! "aggressive" visibility): stratified viewpoints in the cell's free space each render
+//! the full sphere of directions (six cube faces) into object-id buffers with the
+//! standard coverage rule, and the ids seen are united. *Targeted* rays then look for
+//! every object still unseen: segments from the viewpoints (and from fresh random points
+//! of the cell's free space) to random points of the object's front faces (their area,
+//! their highest edge: a roof line seen over other roofs, and their boundary), tested
+//! exactly against every other object (a ray caster of its own, independent of the
+//! rasterizer), so that objects seen only through gaps or as slivers narrower than a
+//! pixel are found too. Every id reported comes with a [`Witness`]: the viewpoint and
+//! the direction of a sample that saw it.
+//!
+//! The VS is a *lower bound* of the true visible set: an object in the VS is visible,
+//! so a conservative PVS must contain it (NOTES §6). Grazing sight lines do not count
+//! (SPEC §3): a targeted ray is accepted only if it stays farther than [`GRAZE_M`] from
+//! every other object, and the rasterizer's closed, watertight standard rule leaves no
+//! crack along shared edges (a party wall seen edge-on shows no pixel of what lies
+//! behind it).
+//!
+//! Viewpoints lie in the cell shrunk by [`INSET_M`] (a cell touching a facade then sees
+//! the facade at a positive distance); points inside or within [`INSET_M`]/2 of a block
+//! are not viewpoints (SPEC §2), nor points at or below the ground.
+//!
+//! ```
+//! use sightline_methods::check::{ground_truth, TruthOptions};
+//! use sightline_scene::{Scene, Object};
+//! use sightline_geom::{Polygon, DVec2, ViewCell};
+//! // A 10 m high wall at y = 10..11 hides a 5 m block behind it, not a 40 m tower.
+//! let rect = |x0, y0, x1, y1| Polygon::rect(DVec2::new(x0, y0), DVec2::new(x1, y1));
+//! let scene = Scene::from_objects(vec![
+//!     Object::block(Some("wall".into()), rect(-50.0, 10.0, 50.0, 11.0), 0.0, 10.0),
+//!     Object::block(Some("low".into()), rect(-5.0, 20.0, 5.0, 30.0), 0.0, 5.0),
+//!     Object::block(Some("tower".into()), rect(10.0, 20.0, 20.0, 30.0), 0.0, 40.0),
+//! ]);
+//! let cell: ViewCell = "-2,0,1.5,2,4,2".parse().unwrap();
+//! let opts = TruthOptions { samples: 16, resolution_px: 128, ..TruthOptions::default() };
+//! let truth = ground_truth(&scene, &cell, &opts);
+//! assert_eq!(truth.visible, vec![0, 2]);
+//! ```
+
+mod rays;
+mod samples;
+mod truth;
+
+pub use truth::{ground_truth, Truth, TruthOptions, TruthScene, Witness, GRAZE_M, INSET_M};
+
+use crate::{MethodError, VisibilityMethod};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use sightline_geom::{DVec2, ViewCell};
+use sightline_scene::Scene;
+use std::time::Instant;
+
+/// An object of the VS that the PVS lacks, with the sample that saw it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Missed {
+    pub id: u32,
+    pub viewpoint: [f64; 3],
+    pub direction: [f64; 3],
+}
+
+/// A method's PVS of one cell against the ground truth.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CellCheck {
+    pub cell: ViewCell,
+    pub pvs_len: usize,
+    pub vs_len: usize,
+    pub missed: Vec<Missed>,
+    /// |PVS| / |VS| (1 when both are empty; |PVS| when only the VS is).
+    pub over: f64,
+    /// 1 − |PVS| / objects.
+    pub hidden_fraction: f64,
+    pub pvs_seconds: f64,
+    pub truth_seconds: f64,
+}
+
+/// Compare a PVS with a truth.
+pub fn compare(objects: usize, pvs: &[u32], truth: &Truth, pvs_seconds: f64) -> CellCheck {
+    let missed: Vec<Missed> = truth
+        .witnesses
+        .iter()
+        .filter(|w| pvs.binary_search(&w.id).is_err())
+        .map(|w| Missed {
+            id: w.id,
+            viewpoint: w.viewpoint,
+            direction: w.direction,
+        })
+        .collect();
+    let vs_len = truth.visible.len();
+    let over = if vs_len == 0 {
+        pvs.len().max(1) as f64
+    } else {
+        pvs.len() as f64 / vs_len as f64
+    };
+    CellCheck {
+        cell: truth.cell,
+        pvs_len: pvs.len(),
+        vs_len,
+        missed,
+        over,
+        hidden_fraction: if objects == 0 {
+            0.0
+        } else {
+            1.0 - pvs.len() as f64 / objects as f64
+        },
+        pvs_seconds,
+        truth_seconds: truth.seconds,
+    }
+}
+
+/// Check `method` on one cell.
+pub fn check_cell(
+    scene: &Scene,
+    method: &dyn VisibilityMethod,
+    cell: &ViewCell,
+    opts: &TruthOptions,
+) -> Result<CellCheck, MethodError> {
+    check_cell_prepared(&TruthScene::new(scene), method, cell, opts)
+}
+
+/// Check `method` on one cell of a prepared scene.
+pub fn check_cell_prepared(
+    truth_scene: &TruthScene,
+    method: &dyn VisibilityMethod,
+    cell: &ViewCell,
+    opts: &TruthOptions,
+) -> Result<CellCheck, MethodError> {
+    let t0 = Instant::now();
+    let mut pvs = method.pvs(cell)?;
+    let pvs_seconds = t0.elapsed().as_secs_f64();
+    pvs.sort_unstable();
+    pvs.dedup();
+    let truth = truth_scene.ground_truth(cell, opts);
+    Ok(compare(truth_scene.objects, &pvs, &truth, pvs_seconds))
+}
+
+/// Aggregate of [`CellCheck`]s (SPEC §5 check JSON).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CheckReport {
+    pub method: String,
+    pub cells: usize,
+    /// Total missed ids over all cells (must be 0 for a conservative method).
+    pub missed: usize,
+    pub over_median: f64,
+    pub over_p90: f64,
+    pub over_max: f64,
+    /// Mean hidden fraction.
+    pub hidden_fraction: f64,
+    /// Median PVS time per cell (ms).
+    pub pvs_ms_median: f64,
+    /// Median ground-truth time per cell (ms).
+    pub truth_ms_median: f64,
+    pub per_cell: Vec<CellCheck>,
+}
+
+/// Nearest-rank quantile of an ascending slice; 0 for none (the report's convention).
+fn quantile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        0.0
+    } else {
+        sightline_stats::quantile_sorted(sorted, q)
+    }
+}
+
+/// Aggregate per-cell checks.
+pub fn aggregate(method: &str, per_cell: Vec<CellCheck>) -> CheckReport {
+    let mut overs: Vec<f64> = per_cell.iter().map(|c| c.over).collect();
+    overs.sort_by(f64::total_cmp);
+    let mut pvs_ms: Vec<f64> = per_cell.iter().map(|c| c.pvs_seconds * 1e3).collect();
+    pvs_ms.sort_by(f64::total_cmp);
+    let mut truth_ms: Vec<f64> = per_cell.iter().map(|c| c.truth_seconds * 1e3).collect();
+    truth_ms.sort_by(f64::total_cmp);
+    let n = per_cell.len();
+    CheckReport {
+        method: method.to_string(),
+        cells: n,
+        missed: per_cell.iter().map(|c| c.missed.len()).sum(),
+        over_median: quantile(&overs, 0.5),
+        over_p90: quantile(&overs, 0.9),
+        over_max: overs.last().copied().unwrap_or(0.0),
+        hidden_fraction: if n == 0 {
+            0.0
+        } else {
+            per_cell.iter().map(|c| c.hidden_fraction).sum::<f64>() / n as f64
+        },
+        pvs_ms_median: quantile(&pvs_ms, 0.5),
+        truth_ms_median: quantile(&truth_ms, 0.5),
+        per_cell,
+    }
+}
+
+/// Check `method` on many cells in parallel; `progress` is called once per finished cell.
+pub fn check_cells(
+    scene: &Scene,
+    method: &dyn VisibilityMethod,
+    cells: &[ViewCell],
+    opts: &TruthOptions,
+    progress: &(dyn Fn() + Sync),
+) -> Result<CheckReport, MethodError> {
+    let ts = TruthScene::new(scene);
+    let per_cell = cells
+        .par_iter()
+        .map(|c| {
+            let r = check_cell_prepared(&ts, method, c, opts);
+            progress();
+            r
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(aggregate(method.name(), per_cell))
+}
+
+/// Up to `k` square street cells of side `size_m` at heights `z = (z0, z1)` whose whole
+/// box is free of blocks (tested on a 5 × 5 grid at both heights), spread evenly over
+/// the scene in a deterministic order.
+pub fn street_cells(scene: &Scene, size_m: f64, z: (f64, f64), k: usize) -> Vec<ViewCell> {
+    if scene.objects.is_empty() || k == 0 || !(size_m > 0.0) {
+        return Vec::new();
+    }
+    let ts = TruthScene::new(scene);
+    let b = scene.bounds.xy();
+    let nx = ((b.size().x / size_m).floor() as usize).min(10_000);
+    let ny = ((b.size().y / size_m).floor() as usize).min(10_000);
+    let mut free = Vec::new();
+    for j in 0..ny {
+        for i in 0..nx {
+            let lo = b.min + DVec2::new(i as f64, j as f64) * size_m;
+            let ok = (0..5).all(|u| {
+                (0..5).all(|v| {
+                    let p = lo + DVec2::new(u as f64, v as f64) * (size_m / 4.0);
+                    ts.is_free(p.extend(z.0)) && ts.is_free(p.extend(z.1))
+                })
+            });
+            if ok {
+                if let Ok(c) =
+                    ViewCell::from_array([lo.x, lo.y, z.0, lo.x + size_m, lo.y + size_m, z.1])
+                {
+                    free.push(c);
+                }
+            }
+        }
+    }
+    if free.len() <= k {
+        return free;
+    }
+    (0..k)
+        .map(|i| free[i * free.len() / k + free.len() / (2 * k)])
+        .collect()
+}
