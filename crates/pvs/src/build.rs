@@ -6,10 +6,11 @@
 //! shard: the journal's order (thread scheduling, interruptions) never reaches the file,
 //! so a resumed build is byte-identical to an uninterrupted one.
 
+use crate::crc::Crc32;
+use crate::error::PvsError;
 use crate::format::{encode_bitmaps, Header};
 use crate::journal::{Journal, JournalKey};
-use crate::shard::Shard;
-use crate::{Crc32, PvsError};
+use crate::partition::Shard;
 use rayon::prelude::*;
 use roaring::RoaringBitmap;
 use sightline_geom::ViewCell;

@@ -14,10 +14,11 @@
 //! block its own CRC-32 in the cell table (so a query checks only what it reads).
 //! The bytes are a pure function of the header, the cells and their sets.
 
+use crate::crc::crc32;
 use crate::delta::{choose_references, MAX_CHAIN};
+use crate::error::PvsError;
 use crate::index::Grid;
-use crate::shard::Shard;
-use crate::{crc32, PvsError};
+use crate::partition::Shard;
 use rayon::prelude::*;
 use roaring::RoaringBitmap;
 use serde::{Deserialize, Serialize};
@@ -396,7 +397,10 @@ pub(crate) fn parse_preamble(
     }
     let version = u16::from_le_bytes([head[8], head[9]]);
     if version != FORMAT_VERSION {
-        return Err(PvsError::Version(version));
+        return Err(PvsError::Version {
+            found: version,
+            supported: FORMAT_VERSION,
+        });
     }
     let count = u16::from_le_bytes([head[10], head[11]]) as usize;
     let total = PREAMBLE_FIXED + count * DIR_ENTRY_LEN + 4;

@@ -6,7 +6,7 @@
 //! point inside a box always falls in one of the buckets the box was inserted in, even
 //! with rounding.
 
-use crate::PvsError;
+use crate::error::PvsError;
 use serde::{Deserialize, Serialize};
 use sightline_geom::{DVec3, ViewCell};
 

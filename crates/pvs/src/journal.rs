@@ -12,8 +12,9 @@
 //! dropped and the file is truncated before appending; any other damage is an error,
 //! since silently dropping finished cells in the middle would hide a real problem.
 
+use crate::crc::{crc32, Crc32};
+use crate::error::PvsError;
 use crate::format::Header;
-use crate::{crc32, Crc32, PvsError};
 use roaring::RoaringBitmap;
 use serde::{Deserialize, Serialize};
 use std::fs::{File, OpenOptions};

@@ -27,60 +27,26 @@
 //! assert_eq!(visible, vec![0, 2, 6]);
 //! ```
 
+//!
+//! Modules depend on each other in one direction only: `crc`, `error`, `partition` and
+//! `index` are leaves; `delta` → `format` → `journal`, `query` → `shard` (merge) and
+//! `build`.
+
 pub mod build;
 mod crc;
 pub mod delta;
+mod error;
 pub mod format;
 pub mod index;
 pub mod journal;
+mod partition;
 pub mod query;
 pub mod shard;
 
 pub use build::{build, BuildOptions, BuildStats};
 pub use crc::{crc32, Crc32};
+pub use error::PvsError;
 pub use format::{Header, FORMAT_VERSION, MAGIC};
+pub use partition::{Shard, SHARD_ENV};
 pub use query::PvsFile;
-pub use shard::{merge, Shard};
-
-use sightline_methods::MethodError;
-
-/// Everything that can go wrong reading, writing or building a `.pvs`.
-#[derive(Debug, thiserror::Error)]
-pub enum PvsError {
-    #[error("{path}: {source}")]
-    Io {
-        path: String,
-        source: std::io::Error,
-    },
-    #[error("not a sightline .pvs file (bad magic number)")]
-    NotPvs,
-    #[error("unsupported .pvs format version {0} (this sightline reads version {FORMAT_VERSION})")]
-    Version(u16),
-    #[error("truncated .pvs file: {0}")]
-    Truncated(String),
-    #[error("corrupted .pvs file: {0}")]
-    Corrupt(String),
-    #[error("this PVS was built for another scene (file fingerprint {file:016x}, scene fingerprint {scene:016x})")]
-    SceneMismatch { file: u64, scene: u64 },
-    #[error("corrupted journal {path}: {message}")]
-    Journal { path: String, message: String },
-    #[error("cannot merge: {0}")]
-    Merge(String),
-    #[error("cell {index} {cell:?}: {source}")]
-    Method {
-        index: usize,
-        cell: [f64; 6],
-        source: MethodError,
-    },
-    #[error("{0}")]
-    Invalid(String),
-}
-
-impl PvsError {
-    pub(crate) fn io(path: &std::path::Path, source: std::io::Error) -> Self {
-        PvsError::Io {
-            path: path.display().to_string(),
-            source,
-        }
-    }
-}
+pub use shard::merge;

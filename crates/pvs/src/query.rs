@@ -2,12 +2,13 @@
 //! checked and kept in memory), then answer point queries by decoding only the data
 //! blocks on the queried cell's delta chain.
 
+use crate::crc::crc32;
+use crate::error::PvsError;
 use crate::format::{
     from_postcard, parse_preamble, section_payload, CellTable, Header, Section, CHAIN_LIMIT,
     TAG_CELL, TAG_DATA, TAG_GRID, TAG_HEAD,
 };
 use crate::index::Grid;
-use crate::{crc32, PvsError};
 use roaring::RoaringBitmap;
 use sightline_geom::{DVec3, ViewCell};
 use sightline_scene::Scene;
