@@ -1,8 +1,8 @@
 //! Depth and object-id buffers, and the draw calls.
 
-use crate::coverage::{self, floor_i, for_row_depths, Depth, Prepared, UnionScratch};
-use crate::pyramid::DepthPyramid;
-use crate::view::{ScreenVertex, View};
+use crate::coverage::{self, Depth, Prepared, UnionScratch};
+use crate::pyramid::{occluded_test, DepthPyramid};
+use crate::view::{fan, ScreenVertex, View};
 use crate::{Coverage, MAX_INPUT_VERTS};
 use glam::DVec3;
 
@@ -199,7 +199,7 @@ impl Framebuffer {
 
     /// The hierarchical max-depth pyramid of the current depth buffer.
     pub fn pyramid(&self) -> DepthPyramid {
-        DepthPyramid::build(self)
+        DepthPyramid::from_depth(self.width, self.height, &self.depth)
     }
 }
 
@@ -211,85 +211,4 @@ fn depth_test(zs: &[f32], d: &mut [f32], ids: &mut [u32], id: u32) {
         *d = if nearer { z } else { *d };
         *i = if nearer { id } else { *i };
     }
-}
-
-/// Split a polygon with many vertices into fan pieces of at most MAX_INPUT_VERTS.
-fn fan(poly: &[DVec3]) -> Vec<Vec<DVec3>> {
-    let mut out = Vec::new();
-    let mut k = 1;
-    while k + 1 < poly.len() {
-        let end = (k + MAX_INPUT_VERTS - 1).min(poly.len());
-        let mut c = Vec::with_capacity(end - k + 1);
-        c.push(poly[0]);
-        c.extend_from_slice(&poly[k..end]);
-        if c.len() >= 3 {
-            out.push(c);
-        }
-        k = end - 1;
-    }
-    out
-}
-
-/// Shared occlusion test: outer coverage, nearest depth, strict comparison.
-pub(crate) fn occluded_test(
-    view: &View,
-    poly: &[DVec3],
-    width: u32,
-    height: u32,
-    depth: &[f32],
-    pyramid: Option<&DepthPyramid>,
-) -> bool {
-    if poly.len() > MAX_INPUT_VERTS {
-        return fan(poly)
-            .iter()
-            .all(|c| occluded_test(view, c, width, height, depth, pyramid));
-    }
-    if poly.iter().any(|p| view.to_camera(*p).z < view.near) {
-        return false;
-    }
-    let mut sv = Vec::with_capacity(MAX_INPUT_VERTS);
-    if view.clip_project(poly, &mut sv) < 3 {
-        return false;
-    }
-    screen_occluded(&sv, width, height, depth, pyramid)
-}
-
-/// `depth` is the level-0 depth buffer (`width × height`, row-major).
-pub(crate) fn screen_occluded(
-    sv: &[ScreenVertex],
-    width: u32,
-    height: u32,
-    depth: &[f32],
-    pyramid: Option<&DepthPyramid>,
-) -> bool {
-    let Some(p) = Prepared::new(sv) else {
-        return false;
-    };
-    if p.off_screen(width, height) {
-        return true;
-    }
-    if let Some(pyr) = pyramid {
-        let x0 = floor_i(p.xmin - coverage::EPS_PX).max(0) as u32;
-        let y0 = floor_i(p.ymin - coverage::EPS_PX).max(0) as u32;
-        let x1 = floor_i(p.xmax + coverage::EPS_PX)
-            .min(width as i64 - 1)
-            .max(0) as u32;
-        let y1 = floor_i(p.ymax + coverage::EPS_PX)
-            .min(height as i64 - 1)
-            .max(0) as u32;
-        if pyr.rect_occluded(x0, y0, x1, y1, p.min_depth()) {
-            return true;
-        }
-    }
-    let w = width as usize;
-    let visible = coverage::outer(&p, width, height, |j, i0, i1| {
-        let k0 = j as usize * w + i0 as usize;
-        let row = &depth[k0..=k0 + (i1 - i0) as usize];
-        let mut seen = false;
-        for_row_depths(&p, Depth::Near, j, i0, row.len(), |k, z| {
-            seen |= row[k] >= z;
-        });
-        seen
-    });
-    !visible
 }

@@ -4,8 +4,9 @@
 //! of it holds a depth `< z`; one texel of a coarse level whose maximum is `< z` proves
 //! it for all its pixels at once.
 
-use crate::framebuffer::{occluded_test, screen_occluded, Framebuffer};
-use crate::view::{ScreenVertex, View};
+use crate::coverage::{self, floor_i, for_row_depths, Depth, Prepared};
+use crate::view::{fan, ScreenVertex, View};
+use crate::MAX_INPUT_VERTS;
 use glam::DVec3;
 
 #[derive(Clone, Debug)]
@@ -15,19 +16,20 @@ struct Level {
     max: Vec<f32>,
 }
 
-/// A max-depth pyramid built from a [`Framebuffer`] (a snapshot: rebuild after drawing).
+/// A max-depth pyramid built from a depth buffer (a snapshot: rebuild after drawing;
+/// [`crate::Framebuffer::pyramid`]).
 #[derive(Clone, Debug)]
 pub struct DepthPyramid {
     levels: Vec<Level>,
 }
 
 impl DepthPyramid {
-    /// Build the pyramid of `fb`'s depth buffer.
-    pub fn build(fb: &Framebuffer) -> Self {
+    /// Build the pyramid of a `width × height` depth buffer (row-major).
+    pub fn from_depth(width: u32, height: u32, depth: &[f32]) -> Self {
         let mut levels = vec![Level {
-            width: fb.width,
-            height: fb.height,
-            max: fb.depth.clone(),
+            width,
+            height,
+            max: depth.to_vec(),
         }];
         while {
             let l = levels.last().map(|l| (l.width, l.height)).unwrap_or((1, 1));
@@ -135,4 +137,68 @@ impl DepthPyramid {
         let (w, h) = self.size();
         screen_occluded(poly, w, h, &self.levels[0].max, Some(self))
     }
+}
+
+/// Shared occlusion test: outer coverage, nearest depth, strict comparison.
+pub(crate) fn occluded_test(
+    view: &View,
+    poly: &[DVec3],
+    width: u32,
+    height: u32,
+    depth: &[f32],
+    pyramid: Option<&DepthPyramid>,
+) -> bool {
+    if poly.len() > MAX_INPUT_VERTS {
+        return fan(poly)
+            .iter()
+            .all(|c| occluded_test(view, c, width, height, depth, pyramid));
+    }
+    if poly.iter().any(|p| view.to_camera(*p).z < view.near) {
+        return false;
+    }
+    let mut sv = Vec::with_capacity(MAX_INPUT_VERTS);
+    if view.clip_project(poly, &mut sv) < 3 {
+        return false;
+    }
+    screen_occluded(&sv, width, height, depth, pyramid)
+}
+
+/// `depth` is the level-0 depth buffer (`width × height`, row-major).
+pub(crate) fn screen_occluded(
+    sv: &[ScreenVertex],
+    width: u32,
+    height: u32,
+    depth: &[f32],
+    pyramid: Option<&DepthPyramid>,
+) -> bool {
+    let Some(p) = Prepared::new(sv) else {
+        return false;
+    };
+    if p.off_screen(width, height) {
+        return true;
+    }
+    if let Some(pyr) = pyramid {
+        let x0 = floor_i(p.xmin - coverage::EPS_PX).max(0) as u32;
+        let y0 = floor_i(p.ymin - coverage::EPS_PX).max(0) as u32;
+        let x1 = floor_i(p.xmax + coverage::EPS_PX)
+            .min(width as i64 - 1)
+            .max(0) as u32;
+        let y1 = floor_i(p.ymax + coverage::EPS_PX)
+            .min(height as i64 - 1)
+            .max(0) as u32;
+        if pyr.rect_occluded(x0, y0, x1, y1, p.min_depth()) {
+            return true;
+        }
+    }
+    let w = width as usize;
+    let visible = coverage::outer(&p, width, height, |j, i0, i1| {
+        let k0 = j as usize * w + i0 as usize;
+        let row = &depth[k0..=k0 + (i1 - i0) as usize];
+        let mut seen = false;
+        for_row_depths(&p, Depth::Near, j, i0, row.len(), |k, z| {
+            seen |= row[k] >= z;
+        });
+        seen
+    });
+    !visible
 }

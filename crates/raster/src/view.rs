@@ -2,6 +2,7 @@
 //! pixel grid. Cube faces (90° fov, square) are the common case; any (asymmetric)
 //! frustum works.
 
+use crate::MAX_INPUT_VERTS;
 use glam::DVec3;
 
 /// One of the six faces of a cube map centred on the eye.
@@ -199,4 +200,21 @@ impl View {
         }
         out.len()
     }
+}
+
+/// Split a polygon with many vertices into fan pieces of at most MAX_INPUT_VERTS.
+pub(crate) fn fan(poly: &[DVec3]) -> Vec<Vec<DVec3>> {
+    let mut out = Vec::new();
+    let mut k = 1;
+    while k + 1 < poly.len() {
+        let end = (k + MAX_INPUT_VERTS - 1).min(poly.len());
+        let mut c = Vec::with_capacity(end - k + 1);
+        c.push(poly[0]);
+        c.extend_from_slice(&poly[k..end]);
+        if c.len() >= 3 {
+            out.push(c);
+        }
+        k = end - 1;
+    }
+    out
 }

@@ -10,5 +10,7 @@ mod experiments;
 mod machine;
 mod plots;
 mod report;
+mod suite;
 
-pub use experiments::{run, Suite};
+pub use experiments::run;
+pub use suite::Suite;

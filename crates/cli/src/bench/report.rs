@@ -1,7 +1,7 @@
 //! The Markdown report: sections, tables, images, the machine and the settings.
 
-use super::experiments::Suite;
 use super::machine::Machine;
+use super::suite::{Suite, NO_REPEAT_MS};
 
 /// A Markdown table.
 pub struct Table {
@@ -61,7 +61,7 @@ impl Report {
             suite.seed,
             suite.cells_per_setting,
             suite.timing_repeats,
-            super::experiments::NO_REPEAT_MS
+            NO_REPEAT_MS
         ));
         Report { md }
     }

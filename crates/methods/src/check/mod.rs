@@ -44,7 +44,8 @@ mod rays;
 mod samples;
 mod truth;
 
-pub use truth::{ground_truth, Truth, TruthOptions, TruthScene, Witness, GRAZE_M, INSET_M};
+pub use rays::GRAZE_M;
+pub use truth::{ground_truth, Truth, TruthOptions, TruthScene, Witness, INSET_M};
 
 use crate::{MethodError, VisibilityMethod};
 use rayon::prelude::*;

@@ -2,8 +2,10 @@
 //! triangles in a uniform 2D grid, segments tested exactly, grazing contacts (closer
 //! than [`GRAZE_M`]) counted as blocked.
 
-use super::truth::{TruthScene, GRAZE_M};
 use sightline_geom::{DVec2, DVec3, Polygon};
+
+/// A targeted ray passing closer than this to another object does not count (metres).
+pub const GRAZE_M: f64 = 1e-6;
 
 /// A ray-casting occluder: an exact prism or a mesh triangle, of object `id`.
 #[derive(Clone, Debug)]
@@ -135,27 +137,6 @@ impl Grid {
         }
         // Fell off the walk (rounding at a cell corner): visit the end cell too.
         f(&self.cells[ye * self.nx + xe])
-    }
-}
-
-impl TruthScene {
-    /// Whether the segment `a → b` meets (or passes within GRAZE_M of) an object other
-    /// than `target`.
-    pub fn segment_blocked(&self, a: DVec3, b: DVec3, target: u32) -> bool {
-        let mut tested: Vec<u32> = Vec::new();
-        self.grid.walk(a.truncate(), b.truncate(), |cell| {
-            for &k in cell {
-                let it = &self.items[k as usize];
-                if it.id == target || tested.contains(&k) {
-                    continue;
-                }
-                tested.push(k);
-                if segment_meets(a, b, it) {
-                    return true;
-                }
-            }
-            false
-        })
     }
 }
 

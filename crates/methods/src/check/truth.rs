@@ -2,7 +2,7 @@
 //! of directions into object-id buffers, then targeted exact rays look for every object
 //! still unseen (see the module doc of [`super`]).
 
-use super::rays::{dist_to_boundary, Grid, Item, Occluder};
+use super::rays::{dist_to_boundary, segment_meets, Grid, Item, Occluder};
 use super::samples::{
     cell_hash, nudge_inward, polygon_area3, random_edge_point, random_point, random_top_edge_point,
     stratified,
@@ -17,8 +17,6 @@ use std::time::Instant;
 
 /// Viewpoints are taken in the cell shrunk by this much (metres).
 pub const INSET_M: f64 = 1e-3;
-/// A targeted ray passing closer than this to another object does not count (metres).
-pub const GRAZE_M: f64 = 1e-6;
 /// Near plane of the cube-face renderings (metres; below INSET_M / 2).
 pub(super) const NEAR_M: f64 = 1e-4;
 
@@ -469,5 +467,26 @@ impl TruthScene {
     /// Whether `p` lies in free space (not inside a block, above the ground).
     pub fn is_free(&self, p: DVec3) -> bool {
         p.z > 0.0 && !self.in_block(p, 0.0)
+    }
+}
+
+impl TruthScene {
+    /// Whether the segment `a → b` meets (or passes within GRAZE_M of) an object other
+    /// than `target`.
+    pub fn segment_blocked(&self, a: DVec3, b: DVec3, target: u32) -> bool {
+        let mut tested: Vec<u32> = Vec::new();
+        self.grid.walk(a.truncate(), b.truncate(), |cell| {
+            for &k in cell {
+                let it = &self.items[k as usize];
+                if it.id == target || tested.contains(&k) {
+                    continue;
+                }
+                tested.push(k);
+                if segment_meets(a, b, it) {
+                    return true;
+                }
+            }
+            false
+        })
     }
 }
