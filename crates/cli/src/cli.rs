@@ -1,4 +1,4 @@
-//! Command-line definitions (clap derive). One variant per command of SPEC §5.
+//! Command-line definitions (clap derive). One variant per command.
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use sightline_geom::ViewCell;

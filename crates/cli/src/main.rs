@@ -1,4 +1,4 @@
-//! `sightline`: conservative potentially visible sets for cities (SPEC §5).
+//! `sightline`: conservative potentially visible sets for cities.
 
 mod bench;
 mod cli;
@@ -11,7 +11,7 @@ fn main() {
     quiet_broken_pipe();
     let args = cli::Cli::parse();
     if let Err(e) = commands::run(args) {
-        // One line, never a panic trace (SPEC §5).
+        // One line, never a panic trace.
         let msg = format!("{e:#}").replace('\n', " ");
         eprintln!("error: {msg}");
         std::process::exit(1);
@@ -19,7 +19,7 @@ fn main() {
 }
 
 /// `sightline … | head` closes stdout early: end quietly, as Unix tools do, instead of
-/// the panic `println!` raises on a broken pipe (SPEC §8: never a panic trace). Every
+/// the panic `println!` raises on a broken pipe (never a panic trace). Every
 /// other panic keeps the default report.
 fn quiet_broken_pipe() {
     let default = std::panic::take_hook();

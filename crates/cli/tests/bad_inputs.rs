@@ -1,4 +1,4 @@
-//! The bad-input corpus (`tests/bad/`, SPEC §8): every malformed file gives exit code 1
+//! The bad-input corpus (`tests/bad/`): every malformed file gives exit code 1
 //! and exactly one `error:` line naming the problem (`err-*`), or loads with a counted
 //! warning of the expected kind (`warn-*`); never a panic, never an output file.
 

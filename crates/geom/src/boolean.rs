@@ -3,7 +3,7 @@
 //! i_overlay snap-rounds every vertex to the grid `GRID_M`; a result can move by up to
 //! about one grid step across its boundary. Callers that need a conservative answer
 //! (eroded occluders must not grow, occludees must not shrink) compensate by one
-//! extra grid step in the safe direction — see `../shared/NOTES.md` §3.
+//! extra grid step in the safe direction (a conservative occluder must stay inside the true one).
 
 use crate::polygon::{ring_signed_area, Polygon};
 use glam::DVec2;

@@ -1,4 +1,4 @@
-//! Viewcells: axis-aligned boxes a viewer can stand in (SPEC §2).
+//! Viewcells: axis-aligned boxes a viewer can stand in.
 
 use crate::aabb::Aabb3;
 use glam::DVec3;

@@ -1,6 +1,6 @@
 //! Geometry kernel of sightline.
 //!
-//! Everything is `f64`, in metres, right-handed with **z up** (SPEC §1). Signs that
+//! Everything is `f64`, in metres, right-handed with **z up**. Signs that
 //! decide inside/outside or left/right go through Shewchuk's robust predicates
 //! ([`orient2d`]); polygon booleans go through `i_overlay` on an explicit 1 mm grid
 //! ([`boolean`]), so callers know how far a result may move and can round it in the

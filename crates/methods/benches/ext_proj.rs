@@ -1,5 +1,5 @@
 //! Criterion benchmark of `ext-proj`: time per cell, plain and with the occlusion sweep,
-//! on a synthetic street grid and a synthetic forest (SPEC §7; heavier scenes and the
+//! on a synthetic street grid and a synthetic forest (heavier scenes and the
 //! paper's curves are in `sightline bench` through `ext_proj::experiments`).
 
 use criterion::{criterion_group, criterion_main, Criterion};

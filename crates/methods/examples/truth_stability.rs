@@ -1,4 +1,4 @@
-//! Stability and time of the ground truth (SPEC §3, issue 3): for street cells of a
+//! Stability and time of the ground truth: for street cells of a
 //! scene, the visible set with the default options, with twice the viewpoints and with
 //! twice the cube-face resolution, and how much it changes.
 //!

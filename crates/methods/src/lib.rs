@@ -5,7 +5,7 @@
 //! answers [`VisibilityMethod::pvs`] for any number of viewcells, from any thread.
 //!
 //! The guarantee of every conservative method: it may report a hidden object as
-//! visible, never a visible object as hidden (SPEC §3).
+//! visible, never a visible object as hidden.
 //!
 //! ```
 //! use std::sync::Arc;
@@ -35,7 +35,7 @@ use sightline_geom::ViewCell;
 use sightline_scene::Scene;
 use std::sync::Arc;
 
-/// Every method name, in the order of SPEC §4.
+/// Every method name, in the order of the README's method table.
 pub const METHOD_NAMES: &[&str] = &[
     "erosion",
     "erosion-segment",
@@ -78,7 +78,7 @@ pub enum MethodError {
 
 /// A visibility method prepared for one scene.
 pub trait VisibilityMethod: Send + Sync {
-    /// The SPEC §4 name.
+    /// The method's name, as selected everywhere (`--method`, the library, the server).
     fn name(&self) -> &'static str;
 
     /// Whether the result is guaranteed to contain every visible object.

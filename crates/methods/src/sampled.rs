@@ -1,5 +1,5 @@
 //! `sampled`: the aggressive visible set from sample viewpoints (survey §7.6) — the
-//! ground truth of SPEC §3, exposed as a method. It is **not conservative**: it can only
+//! ground truth of [`crate::check`], exposed as a method. It is **not conservative**: it can only
 //! miss objects (seen through gaps no sample found), never invent them. See
 //! [`crate::check`] for the sampling (stratified viewpoints, six cube faces per
 //! viewpoint rendered into id buffers, targeted rays for the objects still unseen).

@@ -87,7 +87,7 @@ proptest! {
         }
     }
 
-    /// Touching boxes are eroded as their union (NOTES §1): a box cut in two along a
+    /// Touching boxes are eroded as their union: a box cut in two along a
     /// random line erodes like the whole box.
     #[test]
     fn a_cut_box_erodes_like_the_whole((x0, y0, w, h) in (0.0..5.0f64, 0.0..5.0f64, 12.0..30.0f64, 12.0..30.0f64),

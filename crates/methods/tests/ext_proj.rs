@@ -67,7 +67,7 @@ fn method_is_created_by_name_and_records_its_parameters() {
     assert_eq!(m.pvs(&c).expect("pvs"), pvs(&scene, &c, Params::default()));
 }
 
-/// A row of touching buildings fuses into one wall (NOTES §1): what stands behind the
+/// A row of touching buildings fuses into one wall: what stands behind the
 /// row is hidden, although no single building of the row hides it.
 #[test]
 fn touching_buildings_fuse_into_one_occluder() {

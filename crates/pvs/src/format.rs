@@ -1,4 +1,4 @@
-//! The `.pvs` file format, version 1 (SPEC §6; documented in `docs/pvs-format.md`).
+//! The `.pvs` file format, version 1 (documented in `docs/pvs-format.md`).
 //!
 //! ```text
 //! preamble   magic "SLPVS\0\r\n" | version u16 | section count u16
@@ -42,10 +42,9 @@ pub(crate) const PREAMBLE_FIXED: usize = 12;
 const ZSTD_LEVEL: i32 = 19;
 /// A data block closes after this many cells or this many uncompressed bytes. Large
 /// blocks let zstd find what the delta-PVS leaves: the sets of neighbouring cells that
-/// are not each other's reference still share whole streets. On a 900-cell block of the
-/// 150k metropolis (dual-ray, mean PVS 1,864 ids) 64 KiB blocks store 21.0 % of sorted
-/// `u32` lists, 256 KiB 13.3 %, 512 KiB 9.4 %, 1 MiB 7.4 %; a query that misses the
-/// block cache decompresses one block (≈ 0.5 ms at 512 KiB).
+/// are not each other's reference still share whole streets, and a larger block sees
+/// more of them; a query that misses the block cache decompresses one block, so the
+/// block stays small enough for on-line queries (figures in `docs/pvs-format.md`).
 const BLOCK_CELLS: usize = 4096;
 const BLOCK_BYTES: usize = 512 * 1024;
 /// Decoded sizes above this are treated as corruption, not allocated.
@@ -56,7 +55,7 @@ pub(crate) const MAX_RAW_SECTION: u64 = 1 << 32;
 pub struct Header {
     /// `Scene::fingerprint()` of the scene the sets belong to.
     pub fingerprint: u64,
-    /// SPEC §4 method name.
+    /// Name of the method that built the sets.
     pub method: String,
     /// The method's parameters (`VisibilityMethod::params`).
     pub params: Vec<(String, String)>,

@@ -1,5 +1,5 @@
 //! PVS store of sightline: batch build with a checkpoint journal, the `.pvs` file
-//! format (SPEC §6), point queries, shards and merge.
+//! format, point queries, shards and merge.
 //!
 //! * [`build()`](build::build) runs any [`VisibilityMethod`](sightline_methods::VisibilityMethod)
 //!   over every viewcell in parallel, appends each finished cell to a checksummed journal

@@ -15,7 +15,7 @@
 //!   a convex polygon `left(y)` is convex and `right(y)` concave, so over a band they
 //!   reach their worst values at the band's ends: the fully covered x-set of a band is
 //!   `chord(j) ∩ chord(j+1)`.
-//! * **Inner union** of several pieces (NOTES §2: shrinking each piece separately
+//! * **Inner union** of several pieces (shrinking each piece separately
 //!   opens cracks along every shared edge): a band is cut at every vertex height of
 //!   the pieces; on each sub-band every piece either spans it or not, the piece
 //!   covers the vertical segments `{x} × [a, b]` for `x ∈ chord(a) ∩ chord(b)`; these

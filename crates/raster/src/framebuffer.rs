@@ -137,7 +137,7 @@ impl Framebuffer {
 
     /// Draw the **union** of planar convex world polygons (e.g. every face of one fused
     /// occluder) with the inner rule: a pixel is written when the union covers it
-    /// entirely, even if no single piece does (NOTES §2), with an upper bound of the
+    /// entirely, even if no single piece does, with an upper bound of the
     /// union's depth in it.
     pub fn draw_union<'a>(
         &mut self,

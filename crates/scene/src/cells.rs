@@ -1,4 +1,4 @@
-//! Viewcells (SPEC §2): a grid of square cells over the scene's bounding rectangle at
+//! Viewcells: a grid of square cells over the scene's bounding rectangle at
 //! an eye-height range, keeping only cells whose *free space* — the part of the box
 //! not inside any object's solid — is non-empty.
 //!

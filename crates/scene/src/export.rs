@@ -1,7 +1,7 @@
 //! Writers: a scene as a GeoJSON FeatureCollection (blocks and flat objects) or as a
 //! Wavefront OBJ (any object, as triangles).
 //!
-//! The GeoJSON is what the importer reads back (SPEC §1): one feature per object, a
+//! The GeoJSON is what the importer reads back: one feature per object, a
 //! `Polygon` (or `MultiPolygon` for several parts), properties `name`, `height` (= top),
 //! `min_height` (= base, only when > 0) and `"kind": "street"` for flat objects.
 //! Coordinates are projected metres (marked by a top-level `local_frame` member), written with Rust's shortest round-trip float

@@ -1,4 +1,4 @@
-//! Scene model of sightline (SPEC §1): objects with ids and names, 2.5D blocks, flat
+//! Scene model of sightline: objects with ids and names, 2.5D blocks, flat
 //! ground polygons and triangle meshes, each with an *outer* 2.5D bound (used when the
 //! object is an occludee) and an *inner* 2.5D bound (used when it occludes).
 //!

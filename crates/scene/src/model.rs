@@ -73,7 +73,7 @@ impl Mesh {
     }
 }
 
-/// The geometry of one object (SPEC §1).
+/// The geometry of one object.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Geometry {
     /// 2.5D buildings: prisms, possibly several (building parts), possibly overlapping.
@@ -193,7 +193,7 @@ impl Object {
     }
 }
 
-/// A counted, repairable problem found while loading (SPEC §8).
+/// A counted, repairable problem found while loading.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Warning {
     /// Short stable category, e.g. `"ring-not-closed"`, `"height-from-levels"`.

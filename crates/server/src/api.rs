@@ -1,4 +1,4 @@
-//! HTTP endpoints (SPEC §9, documented in `docs/api.md`).
+//! HTTP endpoints (documented in `docs/api.md`).
 //!
 //! No endpoint takes a path or file name: the viewer's assets are compiled into the binary
 //! ([`crate::web`]) and everything else is computed from the loaded scene, so the API

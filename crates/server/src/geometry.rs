@@ -11,7 +11,7 @@
 //! magic   4 bytes  "SLG1"
 //! count   u32      number of object records
 //! record × count:
-//!   id            u32   object id (SPEC §1)
+//!   id            u32   object id
 //!   kind          u32   0 = blocks, 1 = flat, 2 = mesh
 //!   vertex_count  u32   V
 //!   index_count   u32   I (a multiple of 3: triangles)

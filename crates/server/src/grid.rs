@@ -9,7 +9,7 @@
 use serde::Serialize;
 use sightline_geom::{Aabb3, DVec2, DVec3, ViewCell};
 
-/// Eye-height range of the walking viewcells (SPEC §2 default).
+/// Eye-height range of the walking viewcells (the `cells` default).
 pub const EYE_Z_M: (f64, f64) = (1.5, 2.0);
 
 /// A cell id on a grid (or an index into a `.pvs` file's cells).

@@ -1,4 +1,4 @@
-//! Walkthrough server of sightline (SPEC §9): HTTP API, WebSocket walk sessions with
+//! Walkthrough server of sightline: HTTP API, WebSocket walk sessions with
 //! PVS prefetch, and the embedded browser viewer.
 //!
 //! This is the remote-walkthrough scenario of the dual ray space paper (Koltun et al.

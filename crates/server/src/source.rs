@@ -18,7 +18,7 @@ use std::sync::Arc;
 pub struct SourceInfo {
     /// `"online"` or `"file"`.
     pub kind: &'static str,
-    /// The SPEC §4 method name that produced / produces the sets.
+    /// The name of the method that produced / produces the sets.
     pub method: String,
     /// Whether every set contains every visible object.
     pub conservative: bool,
@@ -192,7 +192,7 @@ impl PvsSource for FileSource {
         SourceInfo {
             kind: "file",
             method: h.method.clone(),
-            // `sampled` and `all` are the only non-conservative names of SPEC §4 (`all`
+            // `sampled` and `all` are the only non-conservative methods (`all`
             // is conservative, if useless).
             conservative: h.method != "sampled",
             params: h.params.iter().map(|(k, v)| format!("{k}={v}")).collect(),

@@ -1,4 +1,4 @@
-//! The experiments of SPEC §7, each a function that appends raw [`Record`]s and
+//! The experiments of the papers that the report reproduces, each a function that appends raw [`Record`]s and
 //! writes its section of the report.
 
 use super::machine::Machine;
@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
-/// The conservative methods, in the order of SPEC §4 (`erosion-rays`, issue 4's §7.1
+/// The conservative methods, in the order of the method table (`erosion-rays`, the erosion paper's §7.1
 /// variant, after the erosion family).
 const CONSERVATIVE: &[&str] = &[
     "erosion",

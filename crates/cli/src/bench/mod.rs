@@ -1,5 +1,5 @@
 //! `sightline bench`: the papers' experiments on our scenes, with a Markdown report,
-//! PNG plots and a JSON of every raw figure (SPEC §7).
+//! PNG plots and a JSON of every raw figure.
 //!
 //! Every method is driven through the one `VisibilityMethod` trait, so the suite grows
 //! as methods land; a method that is not available is listed as such, never replaced.

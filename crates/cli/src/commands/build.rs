@@ -1,4 +1,4 @@
-//! `sightline build`, `sightline merge` and `sightline query`: the PVS store (SPEC §5, §6).
+//! `sightline build`, `sightline merge` and `sightline query`: the PVS store.
 
 use crate::cli::{Command, SceneArg};
 use crate::common::{load_scene, method_options, print_json, progress};

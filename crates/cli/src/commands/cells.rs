@@ -1,5 +1,5 @@
 //! `sightline cells`: cover a scene with square viewcells whose free space is non-empty
-//! (SPEC §2) and write them as a JSON array of `[x0,y0,z0,x1,y1,z1]` boxes.
+//! and write them as a JSON array of `[x0,y0,z0,x1,y1,z1]` boxes.
 
 use crate::cli::Command;
 use crate::common::{load_scene, write_atomic};

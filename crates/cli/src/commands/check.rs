@@ -1,4 +1,4 @@
-//! `sightline check`: a method's PVS against the ground truth on many cells (SPEC §5).
+//! `sightline check`: a method's PVS against the ground truth on many cells.
 
 use crate::cli::Command;
 use crate::common::{load_scene, method_options, print_json, progress};

@@ -1,4 +1,4 @@
-//! `sightline info SCENE [--json]`: counts, bounds and warnings (SPEC §5).
+//! `sightline info SCENE [--json]`: counts, bounds and warnings.
 
 use crate::cli::Command;
 use crate::common::{load_scene, print_json};
@@ -6,7 +6,7 @@ use serde::Serialize;
 use sightline_scene::{Geometry, ObjectKind, Scene, Warning};
 use std::collections::BTreeMap;
 
-/// The `info` JSON (SPEC §5; extra fields allowed).
+/// The `info` JSON (extra fields allowed).
 #[derive(Serialize)]
 struct Info<'a> {
     scene: String,

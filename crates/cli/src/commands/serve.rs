@@ -1,4 +1,4 @@
-//! `sightline serve`: the walkthrough server (SPEC §9) on a scene, answering from a
+//! `sightline serve`: the walkthrough server on a scene, answering from a
 //! `.pvs` file or computing PVS on-line with `--method` (dual ray space paper, §6).
 
 use crate::cli::Command;

@@ -1,4 +1,4 @@
-//! `sightline truth`: the ground-truth visible set of one viewcell (SPEC §3, §5).
+//! `sightline truth`: the ground-truth visible set of one viewcell.
 
 use crate::cli::Command;
 use crate::common::{load_scene, print_json};

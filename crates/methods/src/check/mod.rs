@@ -1,4 +1,4 @@
-//! Ground-truth visible sets and the checking of methods against them (SPEC §3).
+//! Ground-truth visible sets and the checking of methods against them.
 //!
 //! The **visible set (VS)** of a cell is estimated by dense sampling (survey §7.6,
 //! "aggressive" visibility): stratified viewpoints in the cell's free space each render
@@ -13,15 +13,15 @@
 //! the direction of a sample that saw it.
 //!
 //! The VS is a *lower bound* of the true visible set: an object in the VS is visible,
-//! so a conservative PVS must contain it (NOTES §6). Grazing sight lines do not count
-//! (SPEC §3): a targeted ray is accepted only if it stays farther than [`GRAZE_M`] from
+//! so a conservative PVS must contain it. Grazing sight lines do not count
+//!: a targeted ray is accepted only if it stays farther than [`GRAZE_M`] from
 //! every other object, and the rasterizer's closed, watertight standard rule leaves no
 //! crack along shared edges (a party wall seen edge-on shows no pixel of what lies
 //! behind it).
 //!
 //! Viewpoints lie in the cell shrunk by [`INSET_M`] (a cell touching a facade then sees
 //! the facade at a positive distance); points inside or within [`INSET_M`]/2 of a block
-//! are not viewpoints (SPEC §2), nor points at or below the ground.
+//! are not viewpoints, nor points at or below the ground.
 //!
 //! ```
 //! use sightline_methods::check::{ground_truth, TruthOptions};
@@ -137,7 +137,7 @@ pub fn check_cell_prepared(
     Ok(compare(truth_scene.objects, &pvs, &truth, pvs_seconds))
 }
 
-/// Aggregate of [`CellCheck`]s (SPEC §5 check JSON).
+/// Aggregate of [`CellCheck`]s (the `check --json` report).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CheckReport {
     pub method: String,

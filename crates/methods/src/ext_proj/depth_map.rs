@@ -1,6 +1,6 @@
 //! The extended depth map of a projection plane and its hierarchical pyramid
 //! (Durand et al. 2000, §2.3–2.4), with a conservative *inner* rasterization of the
-//! *union* of the occluders' Projections (§3.2, and NOTES §2).
+//! *union* of the occluders' Projections (§3.2; shrinking each piece on its own would leave cracks along every shared edge and lose most of the fusion).
 //!
 //! A pixel receives depth `d` only when it is entirely covered by the union of the
 //! Projections whose depth is at most `d`; its value is the minimum such `d` (the
@@ -441,7 +441,7 @@ mod tests {
         assert_eq!(m.covered(), 4);
     }
 
-    /// Two triangles sharing a diagonal cover the square without a crack (NOTES §2).
+    /// Two triangles sharing a diagonal cover the square without a crack.
     #[test]
     fn union_of_pieces_has_no_crack() {
         let mut b = CoverageBuilder::new(8);

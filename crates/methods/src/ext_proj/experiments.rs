@@ -1,4 +1,4 @@
-//! The paper's experiments as functions the benchmark report can call (SPEC §7):
+//! The paper's experiments as functions the benchmark report can call:
 //! the resolution curve of Fig. 12, plain projection against the occlusion sweep with
 //! 1, 5, 15 planes (§7.2), and the gain of the improved projection (§7.1: "PVS 5 to
 //! 10% smaller"). Timings are wall-clock per cell on the calling thread.

@@ -1,6 +1,6 @@
 //! `ext-proj`: conservative from-region occlusion culling with extended projections
 //! (Durand, Drettakis, Thollot, Puech, *Conservative Visibility Preprocessing using
-//! Extended Projections*, SIGGRAPH 2000; `../shared/papers/extended-projections-2000.txt`).
+//! Extended Projections*, SIGGRAPH 2000).
 //!
 //! **Guarantee**: an object is left out of the PVS only when, on some projection plane,
 //! the extended projection of (a box around) it lies inside the extended projections
@@ -143,8 +143,9 @@ impl Params {
     }
 }
 
-/// Default depth-map resolution. On 50 street cells of 25 m (release, mean PVS):
-/// Lyon 402 / 336 / 303 at 256 / 512 / 1024 px, for 479 / 717 / 813 ms per cell.
+/// Default depth-map resolution: the knee of the PVS-size/time curve of the paper's
+/// Fig. 12 on street cells (each doubling past it buys a few per cent of PVS for about
+/// half again the time; the measured curve is in the benchmark report).
 pub const DEFAULT_RESOLUTION_PX: usize = 512;
 
 /// Default extension of the planes for the corner directions. The paper's 1.5

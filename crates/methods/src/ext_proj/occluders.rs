@@ -1,14 +1,14 @@
 //! Occluders of the extended projections and their selection (Durand et al. 2000,
 //! §3.3 and §6.1 "Occluder selection").
 //!
-//! * Occluders are the objects' *inner* 2.5D prisms (SPEC §1). Touching buildings are
-//!   fused first (NOTES §1): the ground-standing prisms form a height field whose
+//! * Occluders are the objects' *inner* 2.5D prisms. Touching buildings are
+//!   fused first: the ground-standing prisms form a height field whose
 //!   level sets `{H ≥ h}` are unioned and extruded from the ground to `h`; each union
 //!   is split into convex pieces (Hertel–Mehlhorn on a triangulation), so a whole
 //!   street block becomes a few large convex occluders instead of many small ones,
 //!   and slices (§3.3) of neighbouring pieces meet exactly.
 //! * Union results live on a 1 mm grid: every *boundary* edge of a piece is moved
-//!   inward by [`INWARD_M`] (NOTES §3); shared (internal) edges stay put.
+//!   inward by [`INWARD_M`]; shared (internal) edges stay put.
 //! * Selection: an occluder matters where its solid angle, seen from the cell, exceeds
 //!   a threshold; the region where it may be relevant (a disc of radius
 //!   `√(area / threshold)`) is precomputed and stored in a spatial tree (the paper's
@@ -265,7 +265,7 @@ fn bounds_tree(pieces: &[Piece]) -> RTree<Entry> {
     RTree::bulk_load(entries)
 }
 
-/// Level sets of the height field of ground-standing prisms (NOTES §1): for each
+/// Level sets of the height field of ground-standing prisms: for each
 /// chosen level `h`, the union of the footprints of prisms with `top ≥ h`. A level
 /// is kept only where it differs from the next higher one (components identical to
 /// a taller component are dominated by it).

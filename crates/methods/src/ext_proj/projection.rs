@@ -22,7 +22,7 @@ use sightline_geom::{DVec2, DVec3};
 pub const FACE_CLEARANCE_M: f64 = 1e-3;
 
 /// How far below the ground a ground-standing prism is extended for the horizontal
-/// directions. The ground is opaque (SPEC §3: no sight line meets the ground below
+/// directions. The ground is opaque (no sight line meets the ground below
 /// z = 0), so prism ∪ ground contains the extended prism, which stays convex; without
 /// it a plane in front of a wall would lose the rays that pass under the wall's view
 /// of its own foot and hit the ground.

@@ -14,7 +14,7 @@
 //!   contains: pixel `Q` is black iff the bounding rectangle of the cell's view from
 //!   `Q` on the old plane touches only black pixels ([`reproject`]). For a deep cell
 //!   near the planes `E` is several times the cell, and so was the erosion per plane;
-//! * plus the ground: plane points below z = 0 are in its umbra (SPEC §3,
+//! * plus the ground: plane points below z = 0 are in its umbra (no sight line meets the ground below z = 0,
 //!   [`ground_black`]);
 //! * plus the Projections of the occluders lying between the two planes, including
 //!   every mesh triangle (the leaves: each alone hides almost nothing, but their
@@ -384,7 +384,7 @@ fn sweep_direction(
     out
 }
 
-/// The ground is opaque (SPEC §3: no sight line meets the ground below z = 0) and the
+/// The ground is opaque (no sight line meets the ground below z = 0) and the
 /// cell lies above it, so every sight line from the cell to a plane point below the
 /// ground meets the ground first: such pixels are in the umbra. For the horizontal
 /// directions these are the rows whose whole extent lies below z = 0 (`v` is z); for
@@ -414,7 +414,7 @@ pub fn ground_black(plane: &Plane, black: &mut [bool]) {
 /// A cheap proof that an occluder's Projection on `w = x` is void: its views from two
 /// cell corners are shifted by more than its projected width, so they do not overlap
 /// (skipping an occluder is always conservative). A Projection thinner than a pixel is
-/// not skipped: the union-aware coverage fuses it with its neighbours (NOTES §2).
+/// not skipped: the union-aware coverage fuses it with its neighbours.
 fn void_projection(o: &LocalOccluder, lc: &LocalBox, cell: DVec2, x: f64) -> bool {
     let near = (o.near - lc.max.x).max(1e-9);
     let scale = (x - lc.min.x) / near; // largest magnification of a view

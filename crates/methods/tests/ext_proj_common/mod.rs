@@ -1,6 +1,6 @@
 //! A small, independent sampled visibility oracle for the ext-proj tests: segments from
 //! stratified viewpoints of the cell to stratified points on each object's outer
-//! surface, blocked by any triangle of another object (SPEC §3). It can only miss
+//! surface, blocked by any triangle of another object. It can only miss
 //! visible objects, never invent them, so `sampled ⊆ PVS` must hold.
 #![allow(dead_code)]
 

@@ -9,7 +9,7 @@
 //!   large blocks are a ring of buildings around a courtyard (perimeter block), small
 //!   ones are cut into rows of narrow houses. Neighbouring buildings **touch along party
 //!   walls**: they share the very same vertices, so their footprints share edges exactly
-//!   (the case of erosion paper §4 / NOTES §1 that real cities are full of);
+//!   (the case of erosion paper §4 that real cities are full of: erosion must act on their union);
 //! * the central block and a few others are squares (flat objects), often with a
 //!   church: a nave and a tall tower that touch;
 //! * a few blocks get a tower (40–80 m) among their 10–25 m houses;

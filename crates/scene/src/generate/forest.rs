@@ -6,7 +6,7 @@
 //! crown. No single leaf occludes much; only their aggregation does — which is what
 //! the occlusion sweep is for.
 //!
-//! Bounds (SPEC §1): the *inner* bound is the trunk prism (the only solid part; leaves
+//! Bounds: the *inner* bound is the trunk prism (the only solid part; leaves
 //! are not solid); the *outer* bound is two prisms, the trunk prism and the crown's
 //! bounding prism (tighter than one prism over both, and still containing every
 //! triangle).

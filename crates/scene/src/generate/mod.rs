@@ -1,4 +1,4 @@
-//! Scene generators (issue 2, item 5): deterministic synthetic scenes for tests and
+//! Scene generators: deterministic synthetic scenes for tests and
 //! benchmarks. Same seed and size → the same scene, bit for bit (same
 //! [`Scene::fingerprint`](crate::Scene::fingerprint)), on any machine and thread count.
 //!

@@ -15,7 +15,7 @@
 //!   [`super::mesh_bounds`].
 //! * Vertices are `vertices × transform.scale + transform.translate`; x, y are kept in
 //!   the file's CRS (projected metres).
-//! * **Ground**: SPEC's ground is the plane z = 0, while real tiles stand on terrain that
+//! * **Ground**: sightline's ground is the plane z = 0, while real tiles stand on terrain that
 //!   varies (2.5–16 m in Den Haag). Each building is set on the ground plane: every z of a
 //!   Building and of all its parts is lowered by the lowest z of that building (over the
 //!   Building and its parts). Parts keep their heights relative to each other (a tower

@@ -1,4 +1,4 @@
-//! GeoJSON importer (SPEC §1): a FeatureCollection of Polygon / MultiPolygon features.
+//! GeoJSON importer: a FeatureCollection of Polygon / MultiPolygon features.
 //!
 //! * `height` = top (m, number or string with a unit); `min_height` = base (default 0);
 //!   `building:levels` (or `levels`) × 3 m stands in for a missing height (warning

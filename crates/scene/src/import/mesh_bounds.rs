@@ -1,4 +1,4 @@
-//! Conservative 2.5D bounds of triangle meshes (SPEC §1: every object has an *outer*
+//! Conservative 2.5D bounds of triangle meshes (every object has an *outer*
 //! bound, used when it is an occludee, and an *inner* bound, used when it occludes;
 //! erosion paper §4.2 uses such inner approximations of general occluders).
 //!

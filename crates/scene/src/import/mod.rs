@@ -1,4 +1,4 @@
-//! Importers (SPEC §1 "Input formats"). The format is chosen by file extension; a
+//! Importers. The format is chosen by file extension; a
 //! `.json` file is GeoJSON or CityJSON according to its `"type"`.
 //!
 //! Every importer validates and repairs its input ([`validate`]): each repair is a

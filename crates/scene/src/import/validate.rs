@@ -1,4 +1,4 @@
-//! Validation and repair of footprints (SPEC §8, issue 2 item 4).
+//! Validation and repair of footprints.
 //!
 //! Every repair is a counted [`Warning`] with a stable `kind`:
 //!
