@@ -35,19 +35,125 @@ use sightline_geom::ViewCell;
 use sightline_scene::Scene;
 use std::sync::Arc;
 
-/// Every method name, in the order of the README's method table.
-pub const METHOD_NAMES: &[&str] = &[
-    "erosion",
-    "erosion-segment",
-    "erosion-cell",
-    "shrink-sphere",
-    "erosion-rays",
-    "dual-ray",
-    "dual-ray-exact",
-    "ext-proj",
-    "sampled",
-    "all",
-];
+/// The methods, selected by name everywhere (`--method`, the library, the server, the
+/// `.pvs` header).
+///
+/// ```
+/// use sightline_methods::Method;
+/// let m: Method = "dual-ray".parse().unwrap();
+/// assert_eq!(m, Method::DualRay);
+/// assert_eq!(m.name(), "dual-ray");
+/// assert!(!Method::Sampled.is_conservative());
+/// assert!("dual_ray".parse::<Method>().unwrap_err().to_string().contains("known: erosion"));
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Method {
+    /// Erosion of the fused occluders by the shaft-supporting segment, occludees shrunk
+    /// (Décoret et al. 2003, method 4).
+    Erosion,
+    /// Occluders eroded by the supporting segments, occludees as they are (method 3).
+    ErosionSegment,
+    /// Occluders eroded by the whole cell (method 2).
+    ErosionCell,
+    /// Occluders shrunk by the cell's bounding disc (Wonka et al. 2000; method 1).
+    ShrinkSphere,
+    /// `erosion` with X-sampling of the cell (erosion paper §7.1).
+    ErosionRays,
+    /// Hierarchical cell-to-cell tests in a discretized dual ray space (Koltun et al. 2001).
+    DualRay,
+    /// The exact analytic planar algorithm of the same paper (§5.1).
+    DualRayExact,
+    /// Extended projections with extended depth maps (Durand et al. 2000).
+    ExtProj,
+    /// The sampled visible set: aggressive, NOT conservative (the ground truth).
+    Sampled,
+    /// Every object: the no-culling baseline.
+    All,
+}
+
+impl Method {
+    /// Every method, in the order of the README's method table.
+    pub const ALL: [Method; 10] = [
+        Method::Erosion,
+        Method::ErosionSegment,
+        Method::ErosionCell,
+        Method::ShrinkSphere,
+        Method::ErosionRays,
+        Method::DualRay,
+        Method::DualRayExact,
+        Method::ExtProj,
+        Method::Sampled,
+        Method::All,
+    ];
+
+    /// The name the method is selected by.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Method::Erosion => "erosion",
+            Method::ErosionSegment => "erosion-segment",
+            Method::ErosionCell => "erosion-cell",
+            Method::ShrinkSphere => "shrink-sphere",
+            Method::ErosionRays => "erosion-rays",
+            Method::DualRay => "dual-ray",
+            Method::DualRayExact => "dual-ray-exact",
+            Method::ExtProj => "ext-proj",
+            Method::Sampled => "sampled",
+            Method::All => "all",
+        }
+    }
+
+    /// Whether the method's PVS always contains every visible object (`all` trivially
+    /// does; `sampled` does not).
+    pub const fn is_conservative(self) -> bool {
+        !matches!(self, Method::Sampled)
+    }
+}
+
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Method {
+    type Err = MethodError;
+    fn from_str(s: &str) -> Result<Self, MethodError> {
+        Method::ALL
+            .into_iter()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| MethodError::Unknown(s.to_string()))
+    }
+}
+
+/// Every method name, in the order of [`Method::ALL`].
+pub const METHOD_NAMES: &[&str] = &NAMES;
+
+const NAMES: [&str; 10] = {
+    let mut names = [""; 10];
+    let mut i = 0;
+    while i < 10 {
+        names[i] = Method::ALL[i].name();
+        i += 1;
+    }
+    names
+};
+
+/// What [`create`] accepts: a [`Method`], or its name.
+pub trait IntoMethod {
+    fn into_method(self) -> Result<Method, MethodError>;
+}
+
+impl IntoMethod for Method {
+    fn into_method(self) -> Result<Method, MethodError> {
+        Ok(self)
+    }
+}
+
+impl<T: AsRef<str> + ?Sized> IntoMethod for &T {
+    fn into_method(self) -> Result<Method, MethodError> {
+        self.as_ref().parse()
+    }
+}
 
 /// Parameters shared by the methods; each reads the ones it understands and records
 /// them in [`VisibilityMethod::params`].
@@ -95,24 +201,24 @@ pub trait VisibilityMethod: Send + Sync {
     fn pvs(&self, cell: &ViewCell) -> Result<Vec<u32>, MethodError>;
 }
 
-/// Prepare the method called `name` for `scene`.
+/// Prepare `method` (a [`Method`] or its name) for `scene`.
 pub fn create(
-    name: &str,
+    method: impl IntoMethod,
     scene: Arc<Scene>,
     opts: &MethodOptions,
 ) -> Result<Box<dyn VisibilityMethod>, MethodError> {
-    match name {
-        "erosion" => erosion::create("erosion", scene, opts),
-        "erosion-segment" => erosion::create("erosion-segment", scene, opts),
-        "erosion-cell" => erosion::create("erosion-cell", scene, opts),
-        "shrink-sphere" => erosion::create("shrink-sphere", scene, opts),
-        "erosion-rays" => erosion::create("erosion-rays", scene, opts),
-        "dual-ray" => dual_ray::create("dual-ray", scene, opts),
-        "dual-ray-exact" => dual_ray::create("dual-ray-exact", scene, opts),
-        "ext-proj" => ext_proj::create("ext-proj", scene, opts),
-        "sampled" => sampled::create("sampled", scene, opts),
-        "all" => Ok(Box::new(All { scene })),
-        n => Err(MethodError::Unknown(n.to_string())),
+    let m = method.into_method()?;
+    let name = m.name();
+    match m {
+        Method::Erosion
+        | Method::ErosionSegment
+        | Method::ErosionCell
+        | Method::ShrinkSphere
+        | Method::ErosionRays => erosion::create(name, scene, opts),
+        Method::DualRay | Method::DualRayExact => dual_ray::create(name, scene, opts),
+        Method::ExtProj => ext_proj::create(name, scene, opts),
+        Method::Sampled => sampled::create(name, scene, opts),
+        Method::All => Ok(Box::new(All { scene })),
     }
 }
 
