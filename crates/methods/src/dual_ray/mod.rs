@@ -26,7 +26,11 @@
 //! * [`crate::seed`] — objects met first by rays from a few eyes of the cell are reported
 //!   without a test, and so are the kd-nodes holding them (it changes no PVS);
 //! * [`witness`] — a single ray verified clear (exact predicates) answers "visible"
-//!   without gathering the whole shaft; it changes no answer of either planar method.
+//!   without gathering the whole shaft; it changes no answer of either planar method;
+//! * [`vo`] — virtual occluders (Koltun et al. 2000): per cell, a few vertical
+//!   rectangles on planes around the cell, each proven hidden by the box-to-box test;
+//!   a node whose every sight line from the cell crosses them is hidden without its
+//!   own (long) shaft. They only drop provably hidden nodes.
 //!
 //! Order of one box-to-box test along an axis: the occluders next to the narrower box
 //! are gathered first; a witness ray from their gaps, checked along its own line through
@@ -61,6 +65,7 @@ pub mod exact;
 pub mod occluders;
 pub mod plane;
 mod table1;
+pub mod vo;
 pub(crate) mod witness;
 
 pub use table1::{crossing_cells, occluded_area_m2, table1, Table1Row};
@@ -70,6 +75,7 @@ use crate::seed::{SeedGrid, SeedScratch};
 use crate::{MethodError, MethodOptions, VisibilityMethod};
 use occluders::{Axis, Decomposition};
 use plane::{Planar, Scratch};
+use vo::VirtualOccluders;
 use rayon::prelude::*;
 use sightline_geom::{Aabb3, DVec2, DVec3, ViewCell};
 use sightline_scene::Scene;
@@ -119,6 +125,12 @@ pub struct TraversalStats {
     pub witnessed: u64,
     /// Objects reported without a test: met first by a seed ray ([`crate::seed`]).
     pub seeded: u64,
+    /// Box-to-box tests spent proving the cell's virtual occluders ([`vo`]).
+    pub vo_tests: u64,
+    /// Rectangles of the cell's virtual occluders.
+    pub vo_rects: u64,
+    /// Nodes and objects hidden by the virtual occluders, without their own test.
+    pub vo_hidden: u64,
 }
 
 /// The dual ray space method prepared for one scene.
@@ -136,6 +148,7 @@ pub struct DualRay {
     /// Rays from eyes of the cell that report what they meet first.
     seed: SeedGrid,
     use_seed: bool,
+    use_vo: bool,
 }
 
 /// Prepare `dual-ray` or `dual-ray-exact` for `scene`.
@@ -220,7 +233,40 @@ impl DualRay {
             always,
             seed,
             use_seed: true,
+            use_vo: true,
         }
+    }
+
+    /// Turn the virtual occluders ([`vo`]) on or off (on by default). Off, every node
+    /// and object is proven by its own test; the PVS can only grow.
+    pub fn with_virtual_occluders(mut self, on: bool) -> Self {
+        self.use_vo = on;
+        self
+    }
+
+    /// The virtual occluders of `cell` and the box-to-box tests spent on them.
+    pub fn virtual_occluders(&self, cell: &ViewCell) -> VirtualOccluders {
+        let a = self.local(cell);
+        self.build_vo(&a, &mut Scratch::default(), &mut TraversalStats::default())
+    }
+
+    /// §3 of Koltun et al. 2000: the cell's virtual occluders, each proven by the
+    /// box-to-box test of the kd-nodes.
+    fn build_vo(
+        &self,
+        a: &Aabb3,
+        scratch: &mut Scratch,
+        stats: &mut TraversalStats,
+    ) -> VirtualOccluders {
+        let Some(root) = self.tree.nodes.first() else {
+            return VirtualOccluders::none();
+        };
+        let vo = VirtualOccluders::build(a, root.bbox.min.z, |b| {
+            self.hidden(a, b, scratch, stats)
+        });
+        stats.vo_tests = vo.tests as u64;
+        stats.vo_rects = vo.count() as u64;
+        vo
     }
 
     /// Turn the seed rays ([`crate::seed`]) on or off (on by default). The PVS is the same
@@ -247,6 +293,16 @@ impl DualRay {
         let mut stats = TraversalStats::default();
         let mut out: Vec<u32> = self.always.clone();
         let (seen, node_seen) = self.seed_marks(&a, &mut stats);
+        let vo = if self.use_vo {
+            self.build_vo(&a, &mut scratch, &mut stats)
+        } else {
+            VirtualOccluders::none()
+        };
+        let by_vo = |b: &Aabb3, stats: &mut TraversalStats| {
+            let h = vo.hides(&a, b);
+            stats.vo_hidden += h as u64;
+            h
+        };
         let mut stack: Vec<u32> = Vec::new();
         if !self.tree.nodes.is_empty() {
             stack.push(0);
@@ -256,7 +312,10 @@ impl DualRay {
             let known = node_seen.get(n as usize).copied().unwrap_or(false);
             match node.kind {
                 NodeKind::Inner { left, right } => {
-                    if !known && self.hidden(&a, &node.bbox, &mut scratch, &mut stats) {
+                    if !known
+                        && (by_vo(&node.bbox, &mut stats)
+                            || self.hidden(&a, &node.bbox, &mut scratch, &mut stats))
+                    {
                         continue;
                     }
                     stack.push(right);
@@ -267,7 +326,8 @@ impl DualRay {
                     // A leaf of one box is the object's own test.
                     if !known
                         && items.len() > 1
-                        && self.hidden(&a, &node.bbox, &mut scratch, &mut stats)
+                        && (by_vo(&node.bbox, &mut stats)
+                            || self.hidden(&a, &node.bbox, &mut scratch, &mut stats))
                     {
                         continue;
                     }
@@ -276,7 +336,10 @@ impl DualRay {
                             continue;
                         }
                         let is_seen = seen.get(*id as usize).copied().unwrap_or(false);
-                        if is_seen || !self.hidden(&a, b, &mut scratch, &mut stats) {
+                        if is_seen
+                            || !(by_vo(b, &mut stats)
+                                || self.hidden(&a, b, &mut scratch, &mut stats))
+                        {
                             out.push(*id);
                         }
                     }
