@@ -3,8 +3,9 @@
 //! [CELL_SIZE] [CELLS] [RESOLUTION] [MODE]`.
 //!
 //! MODE is `cells` (default: median ms per cell, single thread, and the traversal
-//! counters), `novo` (the same without the virtual occluders), `compare` (with and
-//! without them: medians, and the PVS with them is contained in the one without), `nine` (the 9-cell neighbourhood on a 2-thread pool), `check` (the
+//! counters), `vo` (the same with the cell's strips and virtual occluders on),
+//! `compare` (with and without them: medians, and the PVS with them is contained in the
+//! one without), `nine` (the 9-cell neighbourhood on a 2-thread pool), `check` (the
 //! discretized PVS contains the exact one on every cell) or `table1` (the full table,
 //! resolutions 16..256 × cells 50/100/300 m, CELLS cells per size) or `scaling`
 //! (metropolises of 1k, 10k, 150k and 1M buildings up to BUILDINGS: median ms per cell,
@@ -149,14 +150,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let cells = crossing_cells(&scene, size, count);
     match mode {
         "compare" => {
-            let plain = DualRay::new(
+            let with_vo = DualRay::new(
                 "dual-ray",
                 scene.clone(),
                 Planarity::Discrete { resolution_px: res },
             )
-            .with_virtual_occluders(false);
-            let (ms_vo, cpu_vo, pvs_vo) = time_cells(&m, &cells, false);
-            let (ms_plain, cpu_plain, pvs_plain) = time_cells(&plain, &cells, true);
+            .with_virtual_occluders(true);
+            let (ms_vo, cpu_vo, pvs_vo) = time_cells(&with_vo, &cells, false);
+            let (ms_plain, cpu_plain, pvs_plain) = time_cells(&m, &cells, true);
             let mut sizes = (0usize, 0usize);
             for ((c, v), p) in cells.iter().zip(&pvs_vo).zip(&pvs_plain) {
                 if let Some(id) = v.iter().find(|id| p.binary_search(id).is_err()) {
@@ -174,15 +175,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 sizes.1
             );
         }
-        "novo" => {
-            let plain = DualRay::new(
+        "vo" => {
+            let with_vo = DualRay::new(
                 "dual-ray",
                 scene.clone(),
                 Planarity::Discrete { resolution_px: res },
             )
-            .with_virtual_occluders(false);
-            let (ms, cpu, _) = time_cells(&plain, &cells, false);
-            println!("{size} m cells at {res}² without VOs: median {ms:.1} ms (CPU {cpu:.1})");
+            .with_virtual_occluders(true);
+            let (ms, cpu, _) = time_cells(&with_vo, &cells, false);
+            println!("{size} m cells at {res}² with VOs: median {ms:.1} ms (CPU {cpu:.1})");
         }
         "cells" => {
             let mut ms = Vec::new();
