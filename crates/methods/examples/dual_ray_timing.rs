@@ -84,7 +84,9 @@ fn loglog_slope(pts: &[(f64, f64)]) -> f64 {
 fn scaling(max_n: usize, size: f64, count: usize, res: u32) {
     let mut ms_pts = Vec::new();
     let mut pvs_pts = Vec::new();
-    println!("| buildings | prepare s | ms/cell (CPU) | PVS | ms per visible object | peak RSS GB |");
+    println!(
+        "| buildings | prepare s | ms/cell (CPU) | PVS | ms per visible object | peak RSS GB |"
+    );
     println!("|---|---|---|---|---|---|");
     for n in [1_000, 10_000, 150_000, 1_000_000] {
         if n > max_n {

@@ -125,16 +125,21 @@ fn city() -> impl Strategy<Value = (Vec<Bx>, ViewCell)> {
 /// A wider city of long walls and blocks (up to 400 m) and larger cells, cut into
 /// strips whose virtual occluders' planes have occluders in front and occludees behind.
 fn wide_city() -> impl Strategy<Value = (Vec<Bx>, ViewCell)> {
-    let building =
-        (0i32..40, 0i32..40, 1i32..12, 1i32..4, 2u32..30, any::<bool>()).prop_map(
-            |(x, y, w, d, h, across)| {
-                let (w, d) = if across { (d, w) } else { (w, d) };
-                Bx {
-                    min: DVec3::new(x as f64 * 10.0, y as f64 * 10.0, 0.0),
-                    max: DVec3::new((x + w) as f64 * 10.0, (y + d) as f64 * 10.0, h as f64),
-                }
-            },
-        );
+    let building = (
+        0i32..40,
+        0i32..40,
+        1i32..12,
+        1i32..4,
+        2u32..30,
+        any::<bool>(),
+    )
+        .prop_map(|(x, y, w, d, h, across)| {
+            let (w, d) = if across { (d, w) } else { (w, d) };
+            Bx {
+                min: DVec3::new(x as f64 * 10.0, y as f64 * 10.0, 0.0),
+                max: DVec3::new((x + w) as f64 * 10.0, (y + d) as f64 * 10.0, h as f64),
+            }
+        });
     let cell = (0i32..300, 0i32..300, 5i32..60).prop_map(|(x, y, s)| {
         ViewCell::from_array([
             x as f64 + 0.3,

@@ -777,11 +777,17 @@ fn scaling(b: &mut Bench, names: &[String], rep: &mut Report, out: &Path) -> any
             };
             let recs = b.measure("scaling", &s, m.as_ref(), "", 100.0, &cells, None);
             let t = median(&recs.iter().map(|r| r.ms).collect::<Vec<_>>());
-            let pvs = median(&recs.iter().map(|r| r.visible.len() as f64).collect::<Vec<_>>());
-            per_method
-                .entry(name.clone())
-                .or_default()
-                .push((s.scene.objects.len() as f64, t, pvs));
+            let pvs = median(
+                &recs
+                    .iter()
+                    .map(|r| r.visible.len() as f64)
+                    .collect::<Vec<_>>(),
+            );
+            per_method.entry(name.clone()).or_default().push((
+                s.scene.objects.len() as f64,
+                t,
+                pvs,
+            ));
         }
     }
     let mut table = Table::new(&[

@@ -75,11 +75,11 @@ use crate::seed::{SeedGrid, SeedScratch};
 use crate::{MethodError, MethodOptions, VisibilityMethod};
 use occluders::{Axis, Decomposition};
 use plane::{Planar, Scratch};
-use vo::VirtualOccluders;
 use rayon::prelude::*;
 use sightline_geom::{Aabb3, DVec2, DVec3, ViewCell};
 use sightline_scene::Scene;
 use std::sync::Arc;
+use vo::VirtualOccluders;
 
 /// Default ray-space resolution of `dual-ray` (the paper's choice, §6).
 pub const DEFAULT_RESOLUTION: u32 = 128;
@@ -288,7 +288,13 @@ impl DualRay {
             match node.kind {
                 NodeKind::Inner { left, right } => {
                     if !known
-                        && self.hidden_node(&a, &node.bbox, strips.as_mut(), &mut scratch, &mut stats)
+                        && self.hidden_node(
+                            &a,
+                            &node.bbox,
+                            strips.as_mut(),
+                            &mut scratch,
+                            &mut stats,
+                        )
                     {
                         continue;
                     }
@@ -300,7 +306,13 @@ impl DualRay {
                     // A leaf of one box is the object's own test.
                     if !known
                         && items.len() > 1
-                        && self.hidden_node(&a, &node.bbox, strips.as_mut(), &mut scratch, &mut stats)
+                        && self.hidden_node(
+                            &a,
+                            &node.bbox,
+                            strips.as_mut(),
+                            &mut scratch,
+                            &mut stats,
+                        )
                     {
                         continue;
                     }
@@ -318,7 +330,10 @@ impl DualRay {
                 }
             }
         }
-        for (_, vo) in strips.iter().flat_map(|s| s.across_x.iter().chain(&s.across_y)) {
+        for (_, vo) in strips
+            .iter()
+            .flat_map(|s| s.across_x.iter().chain(&s.across_y))
+        {
             stats.vo_tests += vo.tests;
             stats.vo_rects += vo.count() as u64;
         }
@@ -598,11 +613,19 @@ impl Strips {
                     match axis {
                         Axis::X => {
                             s.min.y = a.min.y + f0 * k;
-                            s.max.y = if i + 1 == n { a.max.y } else { a.min.y + f1 * k };
+                            s.max.y = if i + 1 == n {
+                                a.max.y
+                            } else {
+                                a.min.y + f1 * k
+                            };
                         }
                         Axis::Y => {
                             s.min.x = a.min.x + f0 * k;
-                            s.max.x = if i + 1 == n { a.max.x } else { a.min.x + f1 * k };
+                            s.max.x = if i + 1 == n {
+                                a.max.x
+                            } else {
+                                a.min.x + f1 * k
+                            };
                         }
                     }
                     let normal = match axis {

@@ -58,6 +58,9 @@ const MIN_WIDTH_M: f64 = 25.0;
 const WIDTH_PER_DISTANCE: f64 = 1.0;
 const NEAR_WIDTH_M: f64 = 200.0;
 
+/// Planes whose band would be wider than this (metres) are not built.
+const MAX_BAND_M: f64 = 1e7;
+
 /// Thickness of the thin box proven for a segment (metres): any positive value works,
 /// the proof covers the whole box.
 const THICKNESS_M: f64 = 0.25;
@@ -293,6 +296,9 @@ impl VirtualOccluders {
                     let (_, ax1, ay0, ay1) = span(a, axis, sign);
                     let (_, _, b0, b1) = span(&all, axis, sign);
                     let (b0, b1) = (b0 - 1.0, b1 + 1.0);
+                    if !((b1 - b0).is_finite() && b1 - b0 <= MAX_BAND_M) {
+                        continue; // a cell or scene beyond any city: no plane
+                    }
                     let depth = ((b1 - b0) / MIN_WIDTH_M).log2().ceil().clamp(0.0, 24.0) as u32;
                     planes.push(VoPlane {
                         axis,
@@ -319,11 +325,7 @@ impl VirtualOccluders {
     /// Whether the virtual occluders hide the box `m` from the cell: every segment from
     /// the cell to `m` crosses one plane inside its proven segments. Segments are proven
     /// on demand with `prove(thin box, plane normal)`.
-    pub(crate) fn hides(
-        &mut self,
-        m: &Aabb3,
-        mut prove: impl FnMut(&Aabb3, Axis) -> bool,
-    ) -> bool {
+    pub(crate) fn hides(&mut self, m: &Aabb3, mut prove: impl FnMut(&Aabb3, Axis) -> bool) -> bool {
         let Some(a) = self.cell else {
             return false;
         };
@@ -390,7 +392,13 @@ mod tests {
             }
             v
         };
-        let q = Crossings::new(c, span(&cell, Axis::X, 1.0), 3.0, span(&m, Axis::X, 1.0), 25.0);
+        let q = Crossings::new(
+            c,
+            span(&cell, Axis::X, 1.0),
+            3.0,
+            span(&m, Axis::X, 1.0),
+            25.0,
+        );
         let (ylo, yhi) = q.y_range();
         let mut seen_top = vec![f64::NEG_INFINITY; 10];
         for p in pts(&cell) {
@@ -398,14 +406,18 @@ mod tests {
                 let x = p + (r - p) * ((c - p.x) / (r.x - p.x));
                 assert!(x.y >= ylo && x.y <= yhi, "{x} outside {ylo}..{yhi}");
                 let s0 = -20.0 + 20.0 * ((x.y + 20.0) / 20.0).floor();
-                let top = q.top_within(s0, s0 + 20.0).expect("a crossing in this segment");
+                let top = q
+                    .top_within(s0, s0 + 20.0)
+                    .expect("a crossing in this segment");
                 assert!(x.z <= top, "{x}: above {top}");
                 let i = ((x.y + 20.0) / 20.0).floor() as usize;
                 seen_top[i.min(9)] = seen_top[i.min(9)].max(x.z);
             }
         }
         // Tight enough to matter: the nearest segment's bound is far under the top.
-        let first = (0..10).find(|i| seen_top[*i] > f64::NEG_INFINITY).expect("crossings");
+        let first = (0..10)
+            .find(|i| seen_top[*i] > f64::NEG_INFINITY)
+            .expect("crossings");
         let s0 = -20.0 + 20.0 * first as f64;
         assert!(q.top_within(s0, s0 + 20.0).expect("crossings") < 15.0);
         assert!(q.top_within(500.0, 520.0).is_none());
@@ -432,9 +444,18 @@ mod tests {
         assert!(vo.count() > 0 && vo.tests > 0);
         // Too tall for the proven heights; straddling the planes; past the proven band.
         let mut vo = VirtualOccluders::new(&cell, &scene, &[Axis::X, Axis::Y]);
-        assert!(!vo.hides(&bx(300.0, 0.0, 0.0, 320.0, 20.0, 2000.0), oracle(-500.0, 500.0, 30.0)));
-        assert!(!vo.hides(&bx(5.0, 0.0, 0.0, 1900.0, 20.0, 10.0), oracle(-500.0, 500.0, 30.0)));
-        assert!(!vo.hides(&bx(300.0, 400.0, 0.0, 320.0, 420.0, 10.0), oracle(-50.0, 5.0, 30.0)));
+        assert!(!vo.hides(
+            &bx(300.0, 0.0, 0.0, 320.0, 20.0, 2000.0),
+            oracle(-500.0, 500.0, 30.0)
+        ));
+        assert!(!vo.hides(
+            &bx(5.0, 0.0, 0.0, 1900.0, 20.0, 10.0),
+            oracle(-500.0, 500.0, 30.0)
+        ));
+        assert!(!vo.hides(
+            &bx(300.0, 400.0, 0.0, 320.0, 420.0, 10.0),
+            oracle(-50.0, 5.0, 30.0)
+        ));
     }
 
     #[test]
