@@ -400,7 +400,7 @@ mod tests {
             25.0,
         );
         let (ylo, yhi) = q.y_range();
-        let mut seen_top = vec![f64::NEG_INFINITY; 10];
+        let mut seen_top = [f64::NEG_INFINITY; 10];
         for p in pts(&cell) {
             for r in pts(&m) {
                 let x = p + (r - p) * ((c - p.x) / (r.x - p.x));
