@@ -27,10 +27,11 @@
 //!   without a test, and so are the kd-nodes holding them (it changes no PVS);
 //! * [`witness`] — a single ray verified clear (exact predicates) answers "visible"
 //!   without gathering the whole shaft; it changes no answer of either planar method;
-//! * [`vo`] — virtual occluders (Koltun et al. 2000): per cell, vertical rectangles on
-//!   planes around the cell, each proven hidden by the box-to-box test (on demand,
-//!   once per cell); a node whose every sight line from the cell crosses them is hidden
-//!   without its own (long) shaft. They only drop provably hidden nodes.
+//! * [`vo`] — virtual occluders (Koltun et al. 2000), opt-in
+//!   ([`DualRay::with_virtual_occluders`]): a long shaft the near occluders do not
+//!   close is tried strip by strip of the cell, each strip with vertical rectangles on
+//!   planes just beyond it, proven hidden by the box-to-box test (on demand, once per
+//!   cell); they only drop provably hidden nodes.
 //!
 //! Order of one box-to-box test along an axis: the occluders next to the narrower box
 //! are gathered first; a witness ray from their gaps, checked along its own line through
@@ -133,7 +134,8 @@ pub struct TraversalStats {
     pub vo_tests: u64,
     /// Segments of those virtual occluders proven hidden.
     pub vo_rects: u64,
-    /// Axis tests hidden strip by strip ([`Strips`]), without the whole shaft.
+    /// Axis tests hidden strip by strip (the cell cut into strips, each with its own
+    /// virtual occluders), without the whole shaft.
     pub vo_hidden: u64,
 }
 
@@ -241,7 +243,7 @@ impl DualRay {
         }
     }
 
-    /// Turn the cell's strips and their virtual occluders ([`Strips`], [`vo`]) on or off
+    /// Turn the cell's strips and their virtual occluders ([`vo`]) on or off
     /// (off by default: on the generated metropolis their proofs cost more than the
     /// shafts they spare). On, the PVS can only shrink, and stays a superset of the
     /// visible set and of `dual-ray-exact` with them on.

@@ -17,13 +17,13 @@
 //! the plane (the cell wholly before it). Every segment from a point `a` of the cell to
 //! a point `m` of `M` crosses the plane at a point `p` of `conv(A ∪ M)`; if every such
 //! crossing lies in a virtual occluder, the part `a → p` is blocked, so `a → m` is. The
-//! crossings of a plane by segments between two boxes on either side form a convex
-//! polygon whose extremes along `y` and `z` are reached at the extremes of the crossing
-//! parameter, so four corner combinations bound it ([`VirtualOccluders::hides`]); the
-//! union of the rectangles must cover that bound (closed intervals, no gap). Hence a
-//! node hidden by the virtual occluders is hidden from every point of the cell, and the
-//! PVS keeps its guarantee. It can only shrink: a node is dropped by the virtual
-//! occluders or by its own test, whichever comes first.
+//! crossing parameter's extremes come from two corner pairs of the boxes, and the
+//! crossings within a segment of the plane have their heights bounded at the ends of
+//! their parameter interval (`Crossings`); every segment the crossings meet must hold
+//! at that height (closed intervals, no gap). Hence a node hidden by the virtual
+//! occluders is hidden from every point of the cell, and the PVS keeps its guarantee.
+//! It can only shrink: a node is dropped by the virtual occluders or by its own test,
+//! whichever comes first.
 //!
 //! The rectangles are the dyadic segments of a band spanning the scene across each
 //! plane, proven **lazily**, at a ladder of heights: a node's query proves (once per
@@ -33,6 +33,9 @@
 //! the order of the queries; and a planar method that hides more (the exact one) proves
 //! every segment the discretized one proves, so its virtual occluders hide at least as
 //! much: `dual-ray` keeps containing `dual-ray-exact`.
+//!
+//! `dual-ray` builds them for each strip of a cell (`Strips` in the parent module), on
+//! planes parallel to the strip just beyond it, when the strips are turned on.
 
 use super::occluders::Axis;
 use sightline_geom::{Aabb3, DVec3};
