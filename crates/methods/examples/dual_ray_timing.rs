@@ -3,9 +3,14 @@
 //! [CELL_SIZE] [CELLS] [RESOLUTION] [MODE]`.
 //!
 //! MODE is `cells` (default: median ms per cell, single thread, and the traversal
-//! counters), `nine` (the 9-cell neighbourhood on a 2-thread pool), `check` (the
+//! counters), `vo` (the same with the cell's strips and virtual occluders on),
+//! `compare` (with and without them: medians, and the PVS with them is contained in the
+//! one without), `nine` (the 9-cell neighbourhood on a 2-thread pool), `check` (the
 //! discretized PVS contains the exact one on every cell) or `table1` (the full table,
-//! resolutions 16..256 × cells 50/100/300 m, CELLS cells per size).
+//! resolutions 16..256 × cells 50/100/300 m, CELLS cells per size) or `scaling`
+//! (metropolises of 1k, 10k, 150k and 1M buildings up to BUILDINGS: median ms per cell,
+//! |PVS|, ms per visible object, peak memory, and the fitted exponents of ms and |PVS|
+//! against the number of buildings).
 
 use sightline_geom::ViewCell;
 use sightline_methods::dual_ray::{crossing_cells, table1, DualRay, Planarity};
@@ -29,6 +34,93 @@ fn thread_cpu_ns() -> Option<u64> {
     s.split_whitespace().next()?.parse().ok()
 }
 
+/// Peak resident memory of the process (kB), from `/proc/self/status`.
+fn peak_rss_kb() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
+}
+
+/// Median wall and thread CPU ms per cell of `m` over `cells`, printing each cell.
+fn time_cells(m: &DualRay, cells: &[ViewCell], quiet: bool) -> (f64, f64, Vec<Vec<u32>>) {
+    let mut ms = Vec::new();
+    let mut cpu = Vec::new();
+    let mut out = Vec::new();
+    for c in cells {
+        let t = Instant::now();
+        let c0 = thread_cpu_ns();
+        let (pvs, st) = m.pvs_with_stats(c);
+        let dt = t.elapsed().as_secs_f64() * 1e3;
+        if let (Some(a), Some(b)) = (c0, thread_cpu_ns()) {
+            cpu.push((b - a) as f64 * 1e-6);
+        }
+        if !quiet {
+            println!("{c}: {dt:.1} ms, pvs {}, {st:?}", pvs.len());
+        }
+        ms.push(dt);
+        out.push(pvs);
+    }
+    (median(&mut ms), median(&mut cpu), out)
+}
+
+/// Least-squares slope of `ln y` against `ln x`.
+fn loglog_slope(pts: &[(f64, f64)]) -> f64 {
+    let l: Vec<(f64, f64)> = pts
+        .iter()
+        .filter(|(x, y)| *x > 0.0 && *y > 0.0)
+        .map(|(x, y)| (x.ln(), y.ln()))
+        .collect();
+    let n = l.len() as f64;
+    let (mx, my) = (
+        l.iter().map(|p| p.0).sum::<f64>() / n,
+        l.iter().map(|p| p.1).sum::<f64>() / n,
+    );
+    let sxy: f64 = l.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let sxx: f64 = l.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
+    sxy / sxx
+}
+
+/// The `scaling` mode: one metropolis per size up to `max_n`.
+fn scaling(max_n: usize, size: f64, count: usize, res: u32) {
+    let mut ms_pts = Vec::new();
+    let mut pvs_pts = Vec::new();
+    println!(
+        "| buildings | prepare s | ms/cell (CPU) | PVS | ms per visible object | peak RSS GB |"
+    );
+    println!("|---|---|---|---|---|---|");
+    for n in [1_000, 10_000, 150_000, 1_000_000] {
+        if n > max_n {
+            break;
+        }
+        let scene = Arc::new(metropolis(1, n));
+        let t = Instant::now();
+        let m = DualRay::new(
+            "dual-ray",
+            scene.clone(),
+            Planarity::Discrete { resolution_px: res },
+        );
+        let prep = t.elapsed().as_secs_f64();
+        let cells = crossing_cells(&scene, size, count);
+        let (_, cpu, pvs) = time_cells(&m, &cells, true);
+        let mut sizes: Vec<f64> = pvs.iter().map(|p| p.len() as f64).collect();
+        let pvs_med = median(&mut sizes);
+        let rss = peak_rss_kb().map_or(f64::NAN, |kb| kb as f64 / 1048576.0);
+        println!(
+            "| {n} | {prep:.1} | {cpu:.1} | {pvs_med:.0} | {:.3} | {rss:.2} |",
+            cpu / pvs_med.max(1.0)
+        );
+        ms_pts.push((n as f64, cpu));
+        pvs_pts.push((n as f64, pvs_med));
+    }
+    if ms_pts.len() >= 2 {
+        println!(
+            "fitted exponents vs buildings: ms/cell {:.2}, |PVS| {:.2}",
+            loglog_slope(&ms_pts),
+            loglog_slope(&pvs_pts)
+        );
+    }
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let n: usize = args.get(1).map_or(Ok(100_000), |s| s.parse())?;
@@ -36,6 +128,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let count: usize = args.get(3).map_or(Ok(9), |s| s.parse())?;
     let res: u32 = args.get(4).map_or(Ok(128), |s| s.parse())?;
     let mode = args.get(5).map_or("cells", |s| s.as_str());
+    if mode == "scaling" {
+        scaling(n, size, count, res);
+        if let Some(kb) = peak_rss_kb() {
+            println!("peak RSS {:.2} GB", kb as f64 / 1048576.0);
+        }
+        return Ok(());
+    }
     let t = Instant::now();
     let scene = Arc::new(metropolis(1, n));
     println!(
@@ -52,6 +151,42 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("prepared in {:.2}s", t.elapsed().as_secs_f64());
     let cells = crossing_cells(&scene, size, count);
     match mode {
+        "compare" => {
+            let with_vo = DualRay::new(
+                "dual-ray",
+                scene.clone(),
+                Planarity::Discrete { resolution_px: res },
+            )
+            .with_virtual_occluders(true);
+            let (ms_vo, cpu_vo, pvs_vo) = time_cells(&with_vo, &cells, false);
+            let (ms_plain, cpu_plain, pvs_plain) = time_cells(&m, &cells, true);
+            let mut sizes = (0usize, 0usize);
+            for ((c, v), p) in cells.iter().zip(&pvs_vo).zip(&pvs_plain) {
+                if let Some(id) = v.iter().find(|id| p.binary_search(id).is_err()) {
+                    return Err(format!("{c}: object {id} only with virtual occluders").into());
+                }
+                sizes.0 += v.len();
+                sizes.1 += p.len();
+            }
+            println!(
+                "{size} m cells at {res}², {} cells: with VOs median {ms_vo:.1} ms (CPU \
+                 {cpu_vo:.1}), PVS total {}; without {ms_plain:.1} ms (CPU {cpu_plain:.1}), \
+                 PVS total {}",
+                cells.len(),
+                sizes.0,
+                sizes.1
+            );
+        }
+        "vo" => {
+            let with_vo = DualRay::new(
+                "dual-ray",
+                scene.clone(),
+                Planarity::Discrete { resolution_px: res },
+            )
+            .with_virtual_occluders(true);
+            let (ms, cpu, _) = time_cells(&with_vo, &cells, false);
+            println!("{size} m cells at {res}² with VOs: median {ms:.1} ms (CPU {cpu:.1})");
+        }
         "cells" => {
             let mut ms = Vec::new();
             let mut cpu = Vec::new();
@@ -136,6 +271,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
         other => return Err(format!("unknown mode {other}").into()),
+    }
+    if let Some(kb) = peak_rss_kb() {
+        println!("peak RSS {:.2} GB", kb as f64 / 1048576.0);
     }
     Ok(())
 }

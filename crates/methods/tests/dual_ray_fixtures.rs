@@ -1,7 +1,7 @@
 //! Hand-checked facts for `dual-ray` and `dual-ray-exact` on tiny fixture scenes
 //! (ericw-tools style): each test names what a person standing in the cell sees.
 
-use sightline_geom::{DVec2, Polygon, ViewCell};
+use sightline_geom::{DVec2, DVec3, Polygon, ViewCell};
 use sightline_methods::dual_ray::{DualRay, Planarity};
 use sightline_methods::{create, MethodOptions, VisibilityMethod};
 use sightline_scene::{Object, Prism, Scene};
@@ -232,4 +232,55 @@ fn empty_scene_and_bad_resolution() {
         ..Default::default()
     };
     assert!(create("dual-ray", scene, &opts).is_err());
+}
+
+#[test]
+fn virtual_occluder_behind_a_long_wall_hides_the_far_houses() {
+    // A wall 10 m high, 1 km long, 10 m in front of the cell: the plane 150 m beyond the
+    // cell is hidden up to 26 m, so the low houses far behind need no test of their own;
+    // the tower above the virtual occluder's height is still tested (and seen).
+    let mut objects = vec![Object::block(
+        None,
+        rect(20.0, -500.0, 22.0, 500.0),
+        0.0,
+        10.0,
+    )];
+    for k in 0..6 {
+        let y = -150.0 + 60.0 * k as f64;
+        objects.push(Object::block(
+            None,
+            rect(400.0, y, 410.0, y + 10.0),
+            0.0,
+            6.0,
+        ));
+    }
+    objects.push(Object::block(
+        None,
+        rect(400.0, 0.0, 410.0, 10.0),
+        0.0,
+        450.0,
+    ));
+    let scene = Arc::new(Scene::from_objects(objects));
+    let c = cell("0,0,1.5,10,10,2");
+    for planarity in [Planarity::Exact, Planarity::Discrete { resolution_px: 128 }] {
+        let m = DualRay::new("dual-ray", scene.clone(), planarity).with_virtual_occluders(true);
+        let (pvs, st) = m.pvs_with_stats(&c);
+        assert_eq!(pvs, vec![0, 7], "{planarity:?}");
+        assert!(st.vo_rects > 0 && st.vo_hidden > 0, "{planarity:?}: {st:?}");
+        let plain = DualRay::new("dual-ray", scene.clone(), planarity)
+            .pvs_with_stats(&c)
+            .0;
+        assert_eq!(plain, pvs, "{planarity:?}");
+        // Degenerate cells and cells far outside the scene: answers, never a panic.
+        let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+        let odd = [
+            (v(5.0, 5.0, 1.5), v(5.0, 5.0, 1.5)),
+            (v(1e6, 1e6, 0.0), v(1e6 + 10.0, 1e6 + 10.0, 2.0)),
+            (v(-9e15, 0.0, 0.0), v(9e15, 1.0, 2.0)),
+        ];
+        for (min, max) in odd {
+            let (p, _) = m.pvs_with_stats(&ViewCell { min, max });
+            assert!(p.contains(&7), "{min} {max}: {p:?}");
+        }
+    }
 }

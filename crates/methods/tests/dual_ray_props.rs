@@ -3,7 +3,8 @@
 //! space to sample points on each object, tested against the open boxes of the others).
 //!
 //! * every object the brute force sees is in both PVS (conservative);
-//! * `dual-ray` at every resolution contains `dual-ray-exact`.
+//! * `dual-ray` at every resolution contains `dual-ray-exact`;
+//! * the virtual occluders only drop hidden objects (PVS with them ⊆ without, ⊇ seen).
 
 use proptest::prelude::*;
 use sightline_geom::{DVec2, DVec3, Polygon, ViewCell};
@@ -121,6 +122,38 @@ fn city() -> impl Strategy<Value = (Vec<Bx>, ViewCell)> {
     (prop::collection::vec(building, 4..16), cell)
 }
 
+/// A wider city of long walls and blocks (up to 400 m) and larger cells, cut into
+/// strips whose virtual occluders' planes have occluders in front and occludees behind.
+fn wide_city() -> impl Strategy<Value = (Vec<Bx>, ViewCell)> {
+    let building = (
+        0i32..40,
+        0i32..40,
+        1i32..12,
+        1i32..4,
+        2u32..30,
+        any::<bool>(),
+    )
+        .prop_map(|(x, y, w, d, h, across)| {
+            let (w, d) = if across { (d, w) } else { (w, d) };
+            Bx {
+                min: DVec3::new(x as f64 * 10.0, y as f64 * 10.0, 0.0),
+                max: DVec3::new((x + w) as f64 * 10.0, (y + d) as f64 * 10.0, h as f64),
+            }
+        });
+    let cell = (0i32..300, 0i32..300, 5i32..60).prop_map(|(x, y, s)| {
+        ViewCell::from_array([
+            x as f64 + 0.3,
+            y as f64 + 0.6,
+            1.5,
+            x as f64 + 0.3 + s as f64,
+            y as f64 + 0.6 + s as f64,
+            2.0,
+        ])
+        .expect("valid cell")
+    });
+    (prop::collection::vec(building, 8..18), cell)
+}
+
 fn scene_of(boxes: &[Bx]) -> Arc<Scene> {
     Arc::new(Scene::from_objects(
         boxes
@@ -182,6 +215,32 @@ proptest! {
             prop_assert_eq!(&with, &without);
             for id in &seeded {
                 prop_assert!(without.contains(id), "seed reports {} not in {:?}", id, without);
+            }
+        }
+    }
+
+    /// The cell's strips and virtual occluders drop only hidden objects: with them the
+    /// PVS is contained in the one without, still holds everything the brute force
+    /// sees, and `dual-ray` with them contains `dual-ray-exact` with them.
+    #[test]
+    fn virtual_occluders_only_drop_hidden((boxes, cell) in wide_city()) {
+        let scene = scene_of(&boxes);
+        let vis = brute_visible(&boxes, &cell);
+        let exact = DualRay::new("dual-ray-exact", scene.clone(), Planarity::Exact)
+            .with_virtual_occluders(true)
+            .pvs_with_stats(&cell)
+            .0;
+        for planarity in [Planarity::Exact, Planarity::Discrete { resolution_px: 32 }] {
+            let with = DualRay::new("dual-ray", scene.clone(), planarity)
+                .with_virtual_occluders(true)
+                .pvs_with_stats(&cell)
+                .0;
+            let without = DualRay::new("dual-ray", scene.clone(), planarity).pvs_with_stats(&cell).0;
+            for id in &with {
+                prop_assert!(without.contains(id), "{:?}: {} only with VOs", planarity, id);
+            }
+            for id in vis.iter().chain(&exact) {
+                prop_assert!(with.contains(id), "{:?}: misses {} ({:?})", planarity, id, with);
             }
         }
     }

@@ -686,10 +686,13 @@ fn stored_bytes_per_cell(s: &NamedScene, m: &dyn VisibilityMethod, recs: &[Recor
     Some(file.sizes().0 as f64 / cells.len() as f64)
 }
 
-/// ms/cell vs number of buildings, log-log with the fitted exponent.
+/// ms/cell vs number of buildings, log-log with the fitted exponent; and the PVS size,
+/// its exponent and the ms per visible object, which show whether a method's cost
+/// follows its output.
 fn scaling(b: &mut Bench, names: &[String], rep: &mut Report, out: &Path) -> anyhow::Result<()> {
     rep.section("Scaling with scene size");
-    let mut per_method: HashMap<String, Vec<(f64, f64)>> = HashMap::new();
+    // Per method: (buildings, median ms, median |PVS|).
+    let mut per_method: HashMap<String, Vec<(f64, f64, f64)>> = HashMap::new();
     for &n in &b.suite.scaling_buildings.clone() {
         b.log(&format!("scaling on {n} buildings"));
         let s = NamedScene {
@@ -703,31 +706,52 @@ fn scaling(b: &mut Bench, names: &[String], rep: &mut Report, out: &Path) -> any
             };
             let recs = b.measure("scaling", &s, m.as_ref(), "", 100.0, &cells, None);
             let t = median(&recs.iter().map(|r| r.ms).collect::<Vec<_>>());
-            per_method
-                .entry(name.clone())
-                .or_default()
-                .push((s.scene.objects.len() as f64, t));
+            let pvs = median(
+                &recs
+                    .iter()
+                    .map(|r| r.visible.len() as f64)
+                    .collect::<Vec<_>>(),
+            );
+            per_method.entry(name.clone()).or_default().push((
+                s.scene.objects.len() as f64,
+                t,
+                pvs,
+            ));
         }
     }
-    let mut table = Table::new(&["method", "ms/cell at each size", "fitted exponent"]);
+    let mut table = Table::new(&[
+        "method",
+        "ms/cell at each size",
+        "fitted exponent",
+        "|PVS| at each size",
+        "|PVS| exponent",
+        "ms per visible object",
+    ]);
     let mut series = Vec::new();
     let mut keys: Vec<&String> = per_method.keys().collect();
     keys.sort();
     for k in keys {
         let pts = &per_method[k];
-        let desc = pts
-            .iter()
-            .map(|(n, t)| format!("{n:.0}: {t:.2}"))
-            .collect::<Vec<_>>()
-            .join(", ");
-        table.row(vec![k.clone(), desc, f(loglog_slope(pts), 2)]);
+        let join = |cell: &dyn Fn(&(f64, f64, f64)) -> String| {
+            pts.iter().map(cell).collect::<Vec<_>>().join(", ")
+        };
+        let ms: Vec<(f64, f64)> = pts.iter().map(|p| (p.0, p.1)).collect();
+        let pvs: Vec<(f64, f64)> = pts.iter().map(|p| (p.0, p.2)).collect();
+        table.row(vec![
+            k.clone(),
+            join(&|p| format!("{:.0}: {:.2}", p.0, p.1)),
+            f(loglog_slope(&ms), 2),
+            join(&|p| format!("{:.0}: {:.0}", p.0, p.2)),
+            f(loglog_slope(&pvs), 2),
+            join(&|p| format!("{:.0}: {:.3}", p.0, p.1 / p.2.max(1.0))),
+        ]);
         series.push(Series {
             name: k.clone(),
-            points: pts.clone(),
+            points: ms,
         });
     }
     rep.para(&format!(
-        "Median ms per 100 m cell ({} cells per size) on generated metropolises of growing size (the extended projections paper reports growth close to √n):",
+        "Median ms per 100 m cell ({} cells per size) on generated metropolises of growing size (the extended projections paper reports growth close to √n), the median PVS size and the ms per visible object (a method whose cost follows its output has the two exponents close):",
         b.suite.scaling_cells.max(1)
     ));
     rep.table(&table);

@@ -26,7 +26,12 @@
 //! * [`crate::seed`] — objects met first by rays from a few eyes of the cell are reported
 //!   without a test, and so are the kd-nodes holding them (it changes no PVS);
 //! * [`witness`] — a single ray verified clear (exact predicates) answers "visible"
-//!   without gathering the whole shaft; it changes no answer of either planar method.
+//!   without gathering the whole shaft; it changes no answer of either planar method;
+//! * [`vo`] — virtual occluders (Koltun et al. 2000), opt-in
+//!   ([`DualRay::with_virtual_occluders`]): a long shaft the near occluders do not
+//!   close is tried strip by strip of the cell, each strip with vertical rectangles on
+//!   planes just beyond it, proven hidden by the box-to-box test (on demand, once per
+//!   cell); they only drop provably hidden nodes.
 //!
 //! Order of one box-to-box test along an axis: the occluders next to the narrower box
 //! are gathered first; a witness ray from their gaps, checked along its own line through
@@ -61,6 +66,7 @@ pub mod exact;
 pub mod occluders;
 pub mod plane;
 mod table1;
+pub mod vo;
 pub(crate) mod witness;
 
 pub use table1::{crossing_cells, occluded_area_m2, table1, Table1Row};
@@ -74,6 +80,7 @@ use rayon::prelude::*;
 use sightline_geom::{Aabb3, DVec2, DVec3, ViewCell};
 use sightline_scene::Scene;
 use std::sync::Arc;
+use vo::VirtualOccluders;
 
 /// Default ray-space resolution of `dual-ray` (the paper's choice, §6).
 pub const DEFAULT_RESOLUTION: u32 = 128;
@@ -87,6 +94,10 @@ pub const DEFAULT_RESOLUTION: u32 = 128;
 /// 120 m tried: flat within noise).
 const FIRST_FRACTION: f64 = 0.1;
 const FIRST_MIN_M: f64 = 60.0;
+
+/// Strips of a cell ([`Strips`]): at least this wide (metres), at most this many.
+const STRIP_MIN_M: f64 = 20.0;
+const MAX_STRIPS: usize = 4;
 
 /// An object with more outer prisms than this is tested by its single bounding box.
 const MAX_BOXES_PER_OBJECT: usize = 8;
@@ -119,6 +130,13 @@ pub struct TraversalStats {
     pub witnessed: u64,
     /// Objects reported without a test: met first by a seed ray ([`crate::seed`]).
     pub seeded: u64,
+    /// Box-to-box tests spent proving the virtual occluders of the cell's strips.
+    pub vo_tests: u64,
+    /// Segments of those virtual occluders proven hidden.
+    pub vo_rects: u64,
+    /// Axis tests hidden strip by strip (the cell cut into strips, each with its own
+    /// virtual occluders), without the whole shaft.
+    pub vo_hidden: u64,
 }
 
 /// The dual ray space method prepared for one scene.
@@ -136,6 +154,7 @@ pub struct DualRay {
     /// Rays from eyes of the cell that report what they meet first.
     seed: SeedGrid,
     use_seed: bool,
+    use_vo: bool,
 }
 
 /// Prepare `dual-ray` or `dual-ray-exact` for `scene`.
@@ -220,7 +239,17 @@ impl DualRay {
             always,
             seed,
             use_seed: true,
+            use_vo: false,
         }
+    }
+
+    /// Turn the cell's strips and their virtual occluders ([`vo`]) on or off
+    /// (off by default: on the generated metropolis their proofs cost more than the
+    /// shafts they spare). On, the PVS can only shrink, and stays a superset of the
+    /// visible set and of `dual-ray-exact` with them on.
+    pub fn with_virtual_occluders(mut self, on: bool) -> Self {
+        self.use_vo = on;
+        self
     }
 
     /// Turn the seed rays ([`crate::seed`]) on or off (on by default). The PVS is the same
@@ -247,6 +276,10 @@ impl DualRay {
         let mut stats = TraversalStats::default();
         let mut out: Vec<u32> = self.always.clone();
         let (seen, node_seen) = self.seed_marks(&a, &mut stats);
+        let mut strips = match self.tree.nodes.first() {
+            Some(root) if self.use_vo => Some(Strips::new(&a, &root.bbox)),
+            _ => None,
+        };
         let mut stack: Vec<u32> = Vec::new();
         if !self.tree.nodes.is_empty() {
             stack.push(0);
@@ -256,7 +289,15 @@ impl DualRay {
             let known = node_seen.get(n as usize).copied().unwrap_or(false);
             match node.kind {
                 NodeKind::Inner { left, right } => {
-                    if !known && self.hidden(&a, &node.bbox, &mut scratch, &mut stats) {
+                    if !known
+                        && self.hidden_node(
+                            &a,
+                            &node.bbox,
+                            strips.as_mut(),
+                            &mut scratch,
+                            &mut stats,
+                        )
+                    {
                         continue;
                     }
                     stack.push(right);
@@ -267,7 +308,13 @@ impl DualRay {
                     // A leaf of one box is the object's own test.
                     if !known
                         && items.len() > 1
-                        && self.hidden(&a, &node.bbox, &mut scratch, &mut stats)
+                        && self.hidden_node(
+                            &a,
+                            &node.bbox,
+                            strips.as_mut(),
+                            &mut scratch,
+                            &mut stats,
+                        )
                     {
                         continue;
                     }
@@ -276,12 +323,21 @@ impl DualRay {
                             continue;
                         }
                         let is_seen = seen.get(*id as usize).copied().unwrap_or(false);
-                        if is_seen || !self.hidden(&a, b, &mut scratch, &mut stats) {
+                        if is_seen
+                            || !self.hidden_node(&a, b, strips.as_mut(), &mut scratch, &mut stats)
+                        {
                             out.push(*id);
                         }
                     }
                 }
             }
+        }
+        for (_, vo) in strips
+            .iter()
+            .flat_map(|s| s.across_x.iter().chain(&s.across_y))
+        {
+            stats.vo_tests += vo.tests;
+            stats.vo_rects += vo.count() as u64;
         }
         out.sort_unstable();
         out.dedup();
@@ -353,12 +409,30 @@ impl DualRay {
         std::array::from_fn(|_| it.next().expect("nine cells"))
     }
 
-    /// §3–§5: whether the boxes `a` (the cell) and `b` are hidden from each other, in
-    /// local coordinates.
-    fn hidden(
+    /// A node's or an object's test from the cell `a`, with the cell's strips when
+    /// given.
+    fn hidden_node(
         &self,
         a: &Aabb3,
         b: &Aabb3,
+        strips: Option<&mut Strips>,
+        scratch: &mut Scratch,
+        stats: &mut TraversalStats,
+    ) -> bool {
+        self.hidden_first(a, b, None, strips, scratch, stats)
+    }
+
+    /// §3–§5: whether the boxes `a` (the cell) and `b` are hidden from each other, in
+    /// local coordinates, trying the axis `first` before the other (else the one of the
+    /// larger gap): either axis hiding suffices, so the order changes only the cost.
+    /// With `strips`, a long shaft the near occluders do not close is first tried
+    /// strip by strip ([`Strips`]) before it is gathered whole.
+    fn hidden_first(
+        &self,
+        a: &Aabb3,
+        b: &Aabb3,
+        first: Option<Axis>,
+        mut strips: Option<&mut Strips>,
         scratch: &mut Scratch,
         stats: &mut TraversalStats,
     ) -> bool {
@@ -370,7 +444,7 @@ impl DualRay {
             return false;
         }
         let mut axes = [(gap_x, Axis::X), (gap_y, Axis::Y)];
-        if gap_y > gap_x {
+        if first.map_or(gap_y > gap_x, |f| f == Axis::Y) {
             axes.swap(0, 1);
         }
         for (gap, axis) in axes {
@@ -421,6 +495,12 @@ impl DualRay {
                     stats.near_hidden += 1;
                     return true;
                 }
+                if let Some(st) = strips.as_deref_mut() {
+                    if self.strips_hide(st, b, axis, scratch, stats) {
+                        stats.vo_hidden += 1;
+                        return true;
+                    }
+                }
             }
             Planar::build(scratch, decomp, lo, lo_top, hi, hi_top, None, cell_low);
             stats.planar_tests += 1;
@@ -436,6 +516,132 @@ impl DualRay {
             stats.visible += 1;
         }
         false
+    }
+}
+
+impl DualRay {
+    /// Whether every strip of the cell across `axis` is proven to have `m` hidden: by
+    /// its virtual occluders, or by the occluders near the narrower box of its own shaft.
+    fn strips_hide(
+        &self,
+        strips: &mut Strips,
+        m: &Aabb3,
+        axis: Axis,
+        scratch: &mut Scratch,
+        stats: &mut TraversalStats,
+    ) -> bool {
+        let list = match axis {
+            Axis::X => &mut strips.across_x,
+            Axis::Y => &mut strips.across_y,
+        };
+        for (s, vo) in list.iter_mut() {
+            let s = *s;
+            let by_vo = vo.hides(m, |t, normal| {
+                self.hidden_first(&s, t, Some(normal), None, scratch, stats)
+            });
+            if !by_vo && !self.near_hidden(&s, m, axis, scratch, stats) {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// The test of `b` from `a` along `axis` with only the occluders near the narrower
+    /// box (all of them for a short shaft), by the method's planar algorithm.
+    fn near_hidden(
+        &self,
+        a: &Aabb3,
+        b: &Aabb3,
+        axis: Axis,
+        scratch: &mut Scratch,
+        stats: &mut TraversalStats,
+    ) -> bool {
+        let Some(plane::Oriented {
+            lo,
+            lo_top,
+            hi,
+            hi_top,
+            cell_low,
+        }) = plane::orient(a, b, axis)
+        else {
+            return false;
+        };
+        let len = hi.x0 - lo.x1;
+        let near = (len * FIRST_FRACTION).max(FIRST_MIN_M);
+        let narrow_lo = lo.y1 - lo.y0 < hi.y1 - hi.y0;
+        let gather = (near < len).then_some(if narrow_lo { near } else { -near });
+        let decomp = self.decomposition(axis);
+        Planar::build(scratch, decomp, lo, lo_top, hi, hi_top, gather, cell_low);
+        stats.planar_tests += 1;
+        stats.pieces += scratch.planar.pieces.len() as u64;
+        match self.planarity {
+            Planarity::Discrete { resolution_px } => discrete::hidden(scratch, resolution_px),
+            Planarity::Exact => exact::hidden(scratch),
+        }
+    }
+}
+
+/// The cell cut into strips, each with its own virtual occluders ([`vo`]).
+///
+/// A far node beside a street the cell opens onto is hidden by the row of buildings
+/// along the street, but a cell larger than the street straddles the row's facade, so
+/// no plane separates the cell from the node, and the node's own shaft must gather the
+/// whole row, kilometres of it. Cut into strips along the street, each strip has the
+/// node hidden either by a plane parallel to the street just beyond it (for the strips
+/// in the street: the row hides the plane far along, proven once per strip and cell
+/// for every node behind the row) or by the occluders around the strip itself (the
+/// strips inside the row). A node hidden from every strip is hidden from the cell:
+/// the strips cover it.
+struct Strips {
+    /// Strips cut along `y` with their virtual occluders on planes normal to `y`: for
+    /// the shafts along `x`.
+    across_x: Vec<(Aabb3, VirtualOccluders)>,
+    /// The same with `x` and `y` exchanged.
+    across_y: Vec<(Aabb3, VirtualOccluders)>,
+}
+
+impl Strips {
+    fn new(a: &Aabb3, scene: &Aabb3) -> Self {
+        let cut = |axis: Axis| -> Vec<(Aabb3, VirtualOccluders)> {
+            let k = match axis {
+                Axis::X => a.max.y - a.min.y,
+                Axis::Y => a.max.x - a.min.x,
+            };
+            let n = ((k / STRIP_MIN_M).floor() as usize).clamp(1, MAX_STRIPS);
+            (0..n)
+                .map(|i| {
+                    let (f0, f1) = (i as f64 / n as f64, (i + 1) as f64 / n as f64);
+                    let mut s = *a;
+                    match axis {
+                        Axis::X => {
+                            s.min.y = a.min.y + f0 * k;
+                            s.max.y = if i + 1 == n {
+                                a.max.y
+                            } else {
+                                a.min.y + f1 * k
+                            };
+                        }
+                        Axis::Y => {
+                            s.min.x = a.min.x + f0 * k;
+                            s.max.x = if i + 1 == n {
+                                a.max.x
+                            } else {
+                                a.min.x + f1 * k
+                            };
+                        }
+                    }
+                    let normal = match axis {
+                        Axis::X => Axis::Y,
+                        Axis::Y => Axis::X,
+                    };
+                    (s, VirtualOccluders::new(&s, scene, &[normal]))
+                })
+                .collect()
+        };
+        Strips {
+            across_x: cut(Axis::X),
+            across_y: cut(Axis::Y),
+        }
     }
 }
 
