@@ -245,6 +245,22 @@ pub enum Command {
         #[arg(long)]
         workers: Option<usize>,
     },
+    /// Export a scene as an OGC 3D Tiles 1.1 tileset (and its tile-level PVS).
+    Tiles {
+        #[command(flatten)]
+        scene: SceneArg,
+        /// Output folder (written atomically; replaces a previous tileset).
+        #[arg(short, long)]
+        out: PathBuf,
+        /// Most objects (features) per tile.
+        #[arg(long, default_value_t = 16)]
+        max_features_per_tile: usize,
+        /// A .pvs of this scene: writes the tile-level PVS sidecar `sightline-pvs.json`.
+        #[arg(long)]
+        pvs: Option<PathBuf>,
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
