@@ -244,6 +244,10 @@ pub enum Command {
         /// Worker threads computing PVS on-line (default: one per core).
         #[arg(long)]
         workers: Option<usize>,
+        /// A tileset folder of this scene (`sightline tiles`): served with its PVS-driven
+        /// viewer at /tiles/.
+        #[arg(long)]
+        tiles: Option<PathBuf>,
     },
     /// Export a scene as an OGC 3D Tiles 1.1 tileset (and its tile-level PVS).
     Tiles {
