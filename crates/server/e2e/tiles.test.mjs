@@ -46,11 +46,11 @@ function startServer(args) {
 
 async function main() {
   const city = join(work, 'city.geojson');
-  run('generate', 'city', '--size', '60', '--seed', '3', '-o', city);
-  run('cells', city, '--size', '50', '-o', join(work, 'cells.json'));
+  run('generate', 'city', '--size', '250', '--seed', '3', '-o', city);
+  run('cells', city, '--size', '25', '-o', join(work, 'cells.json'));
   run('build', city, '--cells', join(work, 'cells.json'), '--method', 'dual-ray', '-o', join(work, 'city.pvs'));
   const tilesetDir = join(work, 'tileset');
-  run('tiles', city, '--pvs', join(work, 'city.pvs'), '--max-features-per-tile', '6', '-o', tilesetDir);
+  run('tiles', city, '--pvs', join(work, 'city.pvs'), '--max-features-per-tile', '4', '-o', tilesetDir);
   const sidecar = JSON.parse(readFileSync(join(tilesetDir, 'sightline-pvs.json'), 'utf8'));
   log(`${sidecar.tiles.length} content tiles, ${sidecar.cells.length} cells`);
   // object id → content URI
@@ -76,7 +76,10 @@ async function main() {
     const page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
     const pageErrors = [];
     page.on('pageerror', (e) => pageErrors.push(String(e)));
-    page.on('console', (m) => { if (m.type() === 'error') pageErrors.push(m.text()); });
+    // Console errors, except the browser's own "failed to load resource" lines: failed
+    // responses are checked by URL below (the favicon is not ours).
+    page.on('console', (m) => { if (m.type() === 'error' && !m.text().startsWith('Failed to load resource')) pageErrors.push(m.text()); });
+    page.on('response', (r) => { if (r.status() >= 400 && !r.url().endsWith('/favicon.ico')) pageErrors.push(`HTTP ${r.status()} ${r.url()}`); });
     await page.goto(base + '/tiles/');
     await page.evaluate(() => window.sightlineTiles.ready);
     log('viewer ready');
@@ -87,6 +90,7 @@ async function main() {
     const steps = sidecar.cells.filter((c) => c.box[1] === midRow).sort((a, b) => a.box[0] - b.box[0]).slice(0, 4);
     assert.ok(steps.length >= 2, 'a walk over at least two cells');
     let totalPvs = 0;
+    const everAllowed = new Set();
     for (const [k, c] of steps.entries()) {
       const x = (c.box[0] + c.box[3]) / 2;
       const y = (c.box[1] + c.box[4]) / 2;
@@ -96,6 +100,7 @@ async function main() {
         assert.equal(r.cell, c.index, `step ${k}: the viewer is in cell ${c.index}`);
         r.tiles.forEach((t) => allowed.add(t));
         r.neighbours.forEach((t) => allowed.add(t));
+        allowed.forEach((t) => everAllowed.add(t));
         const stray = r.requested.filter((u) => !allowed.has(u));
         assert.deepEqual(stray, [], `step ${k}: requested tiles outside the tile PVS (+ neighbours)`);
       }
@@ -106,8 +111,11 @@ async function main() {
       log(`step ${k}: cell ${c.index}, truth sees ${truth.visible.length} objects in ${truthTiles.length} tiles; loaded ${loaded.size} of ${sidecar.tiles.length}; missed ${missing.length}`);
       assert.deepEqual(missing, [], `step ${k}: tiles the ground truth sees but the viewer did not load`);
       totalPvs = loaded.size;
-      await page.screenshot({ path: join(outDir, `tiles-step-${k}.png`) });
+      await page.screenshot({ path: join(outDir, `tiles-step-${k}.png`), timeout: 120_000 });
     }
+    // Nothing outside the tile PVS was ever requested, not even before the first cell.
+    const everRequested = await page.evaluate(() => window.sightlineTiles.requested());
+    assert.deepEqual(everRequested.filter((u) => !everAllowed.has(u)), [], 'requests outside every tile PVS of the walk');
     // The plain tileset, for comparison: at least as many tiles.
     await page.evaluate(() => window.sightlineTiles.setPlain(true));
     const last = steps[steps.length - 1];
@@ -115,7 +123,7 @@ async function main() {
     const ly = (last.box[1] + last.box[4]) / 2;
     for (let q = 0; q < 4; q++) await page.evaluate(([px, py, az]) => window.sightlineTiles.lookFrom(px, py, az), [lx, ly, (q * Math.PI) / 2]);
     const plainLoaded = (await page.evaluate(() => window.sightlineTiles.loaded())).length;
-    await page.screenshot({ path: join(outDir, 'tiles-plain.png') });
+    await page.screenshot({ path: join(outDir, 'tiles-plain.png'), timeout: 120_000 });
     log(`plain tileset: ${plainLoaded} tiles loaded (PVS walk: ${totalPvs})`);
     assert.ok(plainLoaded >= totalPvs, 'the plain tileset loads at least what the PVS walk loaded');
     assert.deepEqual(pageErrors, [], 'no page errors');

@@ -44,10 +44,15 @@ scene3.add(new THREE.HemisphereLight(0xffffff, 0x667788, 2.2));
 const sun = new THREE.DirectionalLight(0xffffff, 1.5);
 sun.position.set(0.4, -0.6, 1.0);
 scene3.add(sun);
+// The ground, a little below z = 0 so that flat street polygons stay on top.
+const ground = new THREE.Mesh(new THREE.PlaneGeometry(1e5, 1e5), new THREE.MeshLambertMaterial({ color: 0x9aa58c }));
+ground.position.z = -0.05;
+scene3.add(ground);
 const camera = new THREE.PerspectiveCamera(75, 1, 0.5, 5000);
 camera.up.set(0, 0, 1);
 
 const mask = new PvsMaskPlugin();
+if (params.get('plain') !== '1') mask.allowed = new Set();
 const tiles = new TilesRenderer('/tiles/data/tileset.json');
 tiles.registerPlugin(mask);
 tiles.errorTarget = 16;
@@ -93,13 +98,17 @@ function loadedUris() {
 /** Render until nothing is queued, downloading or parsing for a few frames. */
 async function settle() {
   let quiet = 0;
+  // Loading needs only updates; a software renderer would spend most of the time
+  // drawing, so the scene is drawn once, at the end.
   for (let i = 0; i < 2000 && quiet < 5; i++) {
-    frame();
+    place();
+    tiles.update();
     await new Promise((r) => setTimeout(r, 10));
     const s = tiles.stats;
     const busy = (s.queued || 0) + (s.downloading || 0) + (s.parsing || 0);
     quiet = busy === 0 ? quiet + 1 : 0;
   }
+  frame();
 }
 
 async function fetchCell(p) {
@@ -109,7 +118,8 @@ async function fetchCell(p) {
 }
 
 function applyMask() {
-  mask.allowed = plain || !cell ? null : new Set([...cell.tiles, ...cell.neighbours]);
+  // Before the first cell is known the PVS mode loads nothing.
+  mask.allowed = plain ? null : new Set(cell ? [...cell.tiles, ...cell.neighbours] : []);
   status.textContent = plain
     ? `plain tileset · loaded ${loadedUris().length} tiles`
     : `cell ${cell ? cell.cell : '-'} · PVS ${cell ? cell.tiles.length : 0} tiles (+${cell ? cell.neighbours.length : 0} prefetched) · loaded ${loadedUris().length}`;
@@ -149,7 +159,7 @@ window.addEventListener('keydown', (e) => {
   if (e.key === 's') state.eye.addScaledVector(d, -step);
   if (e.key === 'a') state.azimuth += 0.1;
   if (e.key === 'd') state.azimuth -= 0.1;
-  if ('wsad'.includes(e.key)) lookFrom(state.eye.x, state.eye.y, state.azimuth).catch((err) => { status.textContent = String(err); });
+  if ('wsad'.includes(e.key) && e.key.length === 1) lookFrom(state.eye.x, state.eye.y, state.azimuth).catch((err) => { status.textContent = String(err); });
 });
 
 const ready = new Promise((resolve) => {
@@ -161,13 +171,20 @@ const ready = new Promise((resolve) => {
   frame();
 });
 
-// The loop also makes the first update, which starts loading the root tileset.
+// Render on demand (a software-rendered headless browser cannot afford a continuous
+// loop): when the renderer reports new tiles, and once now for the first update, which
+// starts loading the root tileset.
 resize();
-function loop() {
-  frame();
-  requestAnimationFrame(loop);
+let pending = false;
+function requestFrame() {
+  if (pending) return;
+  pending = true;
+  requestAnimationFrame(() => { pending = false; frame(); });
 }
-requestAnimationFrame(loop);
+tiles.addEventListener('needs-update', requestFrame);
+tiles.addEventListener('load-model', requestFrame);
+window.addEventListener('resize', requestFrame);
+requestFrame();
 
 window.sightlineTiles = {
   ready,

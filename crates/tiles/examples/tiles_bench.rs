@@ -7,8 +7,8 @@
 //!     [--cell 25] [--steps 30] [--max-features 16] [--method dual-ray] [--no-truth]
 //! ```
 //!
-//! The walk: on lines y = const every 20 m, points every 5 m at eye height 1.7 m; the
-//! longest run of points outside every building is walked in 10 m steps, looking ahead
+//! The walk: on lines y = const every 20 m, points every 5 m at eye height 1.7 m, in
+//! the middle of the scene (15 % margins in x, 20 % in y); the longest run of points outside every building is walked in 10 m steps, looking ahead
 //! (the direction of the walk) and, every fifth step, turning round (looking back).
 //! The client model is [`sightline_tiles::sse`] (1920 × 1080, 60° vertical field of
 //! view, 16 px SSE, 5 km far plane); a tile is downloaded once (unbounded cache). The
@@ -81,13 +81,15 @@ fn load(spec: &str) -> Result<Scene, String> {
 
 /// The longest free run along lines y = const (see the module doc), as walk points.
 fn walk(scene: &Scene, free: &TruthScene, steps: usize) -> Vec<DVec3> {
+    // Inside the middle of the city, not along its edge.
     let b = scene.bounds;
+    let (margin_x, margin_y) = (0.15 * (b.max.x - b.min.x), 0.2 * (b.max.y - b.min.y));
     let mut best: Vec<DVec3> = vec![];
-    let mut y = b.min.y + 10.0;
-    while y < b.max.y - 10.0 {
+    let mut y = b.min.y + margin_y;
+    while y < b.max.y - margin_y {
         let mut run: Vec<DVec3> = vec![];
-        let mut x = b.min.x + 10.0;
-        while x < b.max.x - 10.0 {
+        let mut x = b.min.x + margin_x;
+        while x < b.max.x - margin_x {
             let p = DVec3::new(x, y, 1.7);
             if free.is_free(p)
                 && free.is_free(p + DVec3::new(0.0, 2.0, 0.0))
