@@ -162,6 +162,7 @@ window.addEventListener('keydown', (e) => {
   if ('wsad'.includes(e.key) && e.key.length === 1) lookFrom(state.eye.x, state.eye.y, state.azimuth).catch((err) => { status.textContent = String(err); });
 });
 
+let initial = null;
 const ready = new Promise((resolve) => {
   tiles.addEventListener('load-root-tileset', () => resolve(), { once: true });
 }).then(() => {
@@ -169,6 +170,10 @@ const ready = new Promise((resolve) => {
   tiles.getBoundingSphere(sphere);
   state.eye.set(sphere.center.x, sphere.center.y, 1.7);
   frame();
+  // Stand in the middle; a tileset without a tile PVS (or a point outside its cells)
+  // says so instead of loading anything.
+  initial = lookFrom(state.eye.x, state.eye.y, state.azimuth).catch((err) => { status.textContent = String(err); return null; });
+  return initial;
 });
 
 // Render on demand (a software-rendered headless browser cannot afford a continuous
@@ -187,6 +192,7 @@ window.addEventListener('resize', requestFrame);
 requestFrame();
 
 window.sightlineTiles = {
+  /** Resolves (with the first lookFrom's result) once the tileset and the first cell are loaded. */
   ready,
   lookFrom,
   setPlain(v) { plain = !!v; document.getElementById('plain').checked = plain; applyMask(); },
