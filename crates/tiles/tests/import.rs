@@ -276,3 +276,79 @@ fn a_symbolic_link_out_of_the_folder_is_refused() {
     let e = load(&ts.join("link.json")).unwrap_err();
     assert!(e.contains("link leads out"), "{e}");
 }
+
+mod mutations {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn seeds() -> Vec<Vec<u8>> {
+        let scene = generate::city(6, 6);
+        let ids: Vec<u32> = (0..scene.len() as u32).collect();
+        let glb = tile_glb(&scene, &ids, scene.bounds.center());
+        let b = b3dm(
+            &glb,
+            &json!({ "BATCH_LENGTH": 0, "RTC_CENTER": [1, 2, 3] }),
+            &json!({ "name": ["a"] }),
+        );
+        vec![glb, b]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+        /// Corrupted GLB and b3dm content gives an error or a scene, never a panic.
+        #[test]
+        fn corrupted_content_never_panics(
+            which in 0usize..2,
+            flips in prop::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 0..8),
+            cut in any::<prop::sample::Index>(),
+            truncate in any::<bool>(),
+        ) {
+            let mut bytes = seeds().swap_remove(which);
+            for (at, v) in flips {
+                let i = at.index(bytes.len());
+                bytes[i] = v;
+            }
+            if truncate {
+                bytes.truncate(cut.index(bytes.len()));
+            }
+            let _ = import::tileset::parse_content(&bytes);
+        }
+    }
+
+    #[test]
+    fn the_seeds_parse() {
+        for s in seeds() {
+            let scene = import::tileset::parse_content(&s).unwrap();
+            assert_eq!(scene.len(), generate::city(6, 6).len());
+        }
+    }
+}
+
+#[test]
+fn accessors_beyond_their_buffer_are_errors() {
+    let scene = generate::city(6, 6);
+    let ids: Vec<u32> = (0..scene.len() as u32).collect();
+    let glb = tile_glb(&scene, &ids, scene.bounds.center());
+    for (acc, field, value) in [
+        (0, "count", json!(10_000_000)),
+        (1, "count", json!(10_000_000)),
+        (2, "count", json!(10_000_000)),
+        (0, "byteOffset", json!(1_000_000)),
+        (2, "byteOffset", json!(4)),
+    ] {
+        let bad = edit_glb(&glb, |j| j["accessors"][acc][field] = value.clone());
+        let r = import::tileset::parse_content(&bad);
+        eprintln!(
+            "{acc} {field}: {:?}",
+            r.as_ref().map(|s| s.len()).map_err(|e| e.to_string())
+        );
+    }
+    for (view, len) in [(0, 4), (1, 4), (2, 4)] {
+        let bad = edit_glb(&glb, |j| j["bufferViews"][view]["byteLength"] = json!(len));
+        let r = import::tileset::parse_content(&bad);
+        eprintln!(
+            "view {view}: {:?}",
+            r.as_ref().map(|s| s.len()).map_err(|e| e.to_string())
+        );
+    }
+}

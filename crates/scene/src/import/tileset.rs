@@ -74,6 +74,29 @@ pub fn from_value(root: &Value, path: &Path) -> Result<Scene, ImportError> {
     Ok(scene)
 }
 
+/// The objects of one tile content (GLB or b3dm) in the tileset frame of an untransformed
+/// tile: the content parsers alone, for fuzzing and tests.
+pub fn parse_content(bytes: &[u8]) -> Result<Scene, ImportError> {
+    let mut ctx = Importer {
+        folder: PathBuf::new(),
+        chain: vec![],
+        diag: Diagnostics::default(),
+        objects: Vec::new(),
+        tiles: 0,
+    };
+    let r = if bytes.starts_with(b"glTF") {
+        ctx.glb(bytes, DMat4::IDENTITY, None, &Names::None, "content")
+    } else if bytes.starts_with(b"b3dm") {
+        ctx.b3dm(bytes, DMat4::IDENTITY, "content")
+    } else {
+        Err("not GLB or b3dm".into())
+    };
+    r.map_err(|m| ImportError::Format(format!("content: {m}")))?;
+    let mut scene = Scene::from_objects(ctx.objects);
+    scene.warnings = ctx.diag.warnings;
+    Ok(scene)
+}
+
 struct Importer {
     /// Canonical folder of the top tileset: no URI may leave it.
     folder: PathBuf,
@@ -403,8 +426,12 @@ impl Importer {
                 }
                 let get = |b: gltf::Buffer| buffers.get(b.index()).map(|d| &d.0[..]);
                 let reader = prim.reader(get);
+                // POSITION is required (glTF §3.7.2.1): unreadable means out of its buffer.
                 let Some(pos) = reader.read_positions() else {
-                    continue;
+                    return Err(format!(
+                        "mesh {}: POSITION accessor cannot be read",
+                        gmesh.index()
+                    ));
                 };
                 let points: Vec<DVec3> = pos
                     .map(|p| {
@@ -417,10 +444,23 @@ impl Importer {
                     })
                     .collect();
                 let n = points.len() as u32;
-                let idx: Vec<u32> = match reader.read_indices() {
-                    Some(i) => i.into_u32().collect(),
-                    None => (0..n).collect(),
+                let idx: Vec<u32> = match (reader.read_indices(), prim.indices()) {
+                    (Some(i), _) => i.into_u32().collect(),
+                    (None, None) => (0..n).collect(),
+                    (None, Some(_)) => {
+                        return Err(format!(
+                            "mesh {}: indices accessor cannot be read",
+                            gmesh.index()
+                        ))
+                    }
                 };
+                if !idx.len().is_multiple_of(3) {
+                    return Err(format!(
+                        "mesh {}: {} indices, not a multiple of 3",
+                        gmesh.index(),
+                        idx.len()
+                    ));
+                }
                 if let Some(bad) = idx.iter().find(|&&i| i >= n) {
                     return Err(format!(
                         "index {bad} out of range ({n} vertices) in mesh {}",
