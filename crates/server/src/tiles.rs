@@ -150,14 +150,21 @@ async fn pvs(State(t): State<Arc<TilesState>>, RawQuery(q): RawQuery) -> Respons
     if !p.is_finite() {
         return json_error(StatusCode::BAD_REQUEST, "'at' must be finite");
     }
-    let Some(cell) = sc.locate(p) else {
-        return json_error(
+    match cell_tiles(sc, p) {
+        Some(v) => Json(v).into_response(),
+        None => json_error(
             StatusCode::NOT_FOUND,
             format!("no cell of the tile PVS holds {x},{y},{z}"),
-        );
-    };
+        ),
+    }
+}
+
+/// The `/tiles/pvs` answer for the cell holding `p` (`None` outside every cell).
+pub fn cell_tiles(sc: &Sidecar, p: DVec3) -> Option<serde_json::Value> {
+    let cell = sc.locate(p)?;
     let own: BTreeSet<u32> = cell.tiles.iter().copied().collect();
     let b = cell.bounds;
+    // Cells sharing a face, an edge or a corner in plan.
     let touches = |o: &[f64; 6]| (0..2).all(|k| o[k] <= b[k + 3] + 1e-6 && b[k] <= o[k + 3] + 1e-6);
     let neighbours: BTreeSet<u32> = sc
         .cells
@@ -167,14 +174,13 @@ async fn pvs(State(t): State<Arc<TilesState>>, RawQuery(q): RawQuery) -> Respons
         .filter(|t| !own.contains(t))
         .collect();
     let uri = |t: &u32| sc.tiles[*t as usize].uri.clone();
-    Json(json!({
+    Some(json!({
         "cell": cell.index,
         "box": cell.bounds,
         "tiles": cell.tiles.iter().map(uri).collect::<Vec<_>>(),
         "features": cell.features,
         "neighbours": neighbours.iter().map(uri).collect::<Vec<_>>(),
     }))
-    .into_response()
 }
 
 #[cfg(test)]
@@ -213,5 +219,51 @@ mod tests {
             TilesState::open(d.path(), 0).is_err(),
             "a folder without tileset.json"
         );
+    }
+
+    #[test]
+    fn a_cell_answers_its_tiles_and_its_neighbours_tiles() {
+        use sightline_geom::ViewCell;
+        use sightline_scene::{Object, Scene};
+        let scene = Scene::from_objects(
+            (0..6)
+                .map(|i| {
+                    let x = 30.0 * i as f64;
+                    Object::rect_block(x, 0.0, x + 10.0, 10.0, 5.0)
+                })
+                .collect(),
+        );
+        let layout = sightline_tiles::layout::Layout::build(&scene, 1).unwrap();
+        let cell = |x: f64| {
+            ViewCell::new(DVec3::new(x, 20.0, 1.5), DVec3::new(x + 10.0, 30.0, 2.0)).unwrap()
+        };
+        // Three cells in a row: 0 sees objects 0 and 1, 1 sees 2, 2 (not touching 0) sees 5.
+        let sc = Sidecar::build(
+            &layout,
+            scene.fingerprint(),
+            "test",
+            vec![
+                (0, cell(0.0), vec![0, 1]),
+                (1, cell(10.0), vec![2]),
+                (2, cell(20.0), vec![5]),
+            ],
+        )
+        .unwrap();
+        let uri = |o: usize| {
+            layout.tiles[layout.placement[o].tile as usize]
+                .content_uri()
+                .unwrap()
+        };
+        let v = cell_tiles(&sc, DVec3::new(5.0, 25.0, 1.7)).unwrap();
+        assert_eq!(v["cell"], 0);
+        assert_eq!(v["tiles"].as_array().unwrap().len(), 2);
+        assert_eq!(v["neighbours"], json!([uri(2)]));
+        let v = cell_tiles(&sc, DVec3::new(15.0, 25.0, 1.7)).unwrap();
+        let mut n: Vec<String> = serde_json::from_value(v["neighbours"].clone()).unwrap();
+        n.sort();
+        let mut want = vec![uri(0), uri(1), uri(5)];
+        want.sort();
+        assert_eq!(n, want);
+        assert!(cell_tiles(&sc, DVec3::new(500.0, 25.0, 1.7)).is_none());
     }
 }
