@@ -19,3 +19,19 @@ if [ ! -f crates/server/e2e/node_modules/.package-lock.json ] \
 fi
 cargo build --workspace --bins
 node crates/server/e2e/walk.test.mjs
+
+# 3D Tiles (crates/tiles): a small generated city exported as a tileset, every GLB
+# checked by the Khronos glTF-Validator (npm gltf-validator) and tileset.json by the 3D
+# Tiles rules of crates/tiles/validate/validate.mjs (0 errors required); then the
+# PVS-driven viewer /tiles/ in the browser above (0 visible tiles missed). Installs are
+# skipped when already present.
+if [ ! -f crates/tiles/validate/node_modules/.package-lock.json ] \
+  || [ crates/tiles/validate/package-lock.json -nt crates/tiles/validate/node_modules/.package-lock.json ]; then
+  (cd crates/tiles/validate && npm ci --no-audit --no-fund)
+fi
+TILES_TMP="$(mktemp -d)"
+target/debug/sightline generate city --size 80 -o "$TILES_TMP/city.geojson" >/dev/null
+target/debug/sightline --quiet tiles "$TILES_TMP/city.geojson" --max-features-per-tile 8 -o "$TILES_TMP/tileset"
+node crates/tiles/validate/validate.mjs "$TILES_TMP/tileset"
+rm -rf "$TILES_TMP"
+node crates/server/e2e/tiles.test.mjs

@@ -248,6 +248,26 @@ pub enum Command {
         /// Worker threads computing PVS on-line (default: one per core).
         #[arg(long)]
         workers: Option<usize>,
+        /// A tileset folder of this scene (`sightline tiles`): served with its PVS-driven
+        /// viewer at /tiles/.
+        #[arg(long)]
+        tiles: Option<PathBuf>,
+    },
+    /// Export a scene as an OGC 3D Tiles 1.1 tileset (and its tile-level PVS).
+    Tiles {
+        #[command(flatten)]
+        scene: SceneArg,
+        /// Output folder (written atomically; replaces a previous tileset).
+        #[arg(short, long)]
+        out: PathBuf,
+        /// Most objects (features) per tile.
+        #[arg(long, default_value_t = 16)]
+        max_features_per_tile: usize,
+        /// A .pvs of this scene: writes the tile-level PVS sidecar `sightline-pvs.json`.
+        #[arg(long)]
+        pvs: Option<PathBuf>,
+        #[arg(long)]
+        json: bool,
     },
 }
 

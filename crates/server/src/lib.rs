@@ -36,6 +36,7 @@ pub mod geometry;
 pub mod grid;
 pub mod limits;
 pub mod source;
+pub mod tiles;
 pub mod walk;
 pub mod web;
 
@@ -163,6 +164,8 @@ impl AppState {
 pub struct Server {
     state: Arc<AppState>,
     shutdown_tx: watch::Sender<bool>,
+    /// Routes added by [`Server::merge_routes`] (the 3D Tiles viewer).
+    extra: Option<axum::Router>,
 }
 
 impl Server {
@@ -190,7 +193,16 @@ impl Server {
                 shutdown,
             }),
             shutdown_tx,
+            extra: None,
         }
+    }
+
+    /// Serve `routes` too (e.g. [`tiles::router`]); their paths must not clash.
+    pub fn merge_routes(&mut self, routes: axum::Router) {
+        self.extra = Some(match self.extra.take() {
+            Some(r) => r.merge(routes),
+            None => routes,
+        });
     }
 
     pub fn state(&self) -> &Arc<AppState> {
@@ -199,7 +211,11 @@ impl Server {
 
     /// The HTTP routes (viewer, API, walk sessions).
     pub fn router(&self) -> axum::Router {
-        api::router(self.state.clone())
+        let r = api::router(self.state.clone());
+        match &self.extra {
+            Some(extra) => r.merge(extra.clone()),
+            None => r,
+        }
     }
 
     /// Serve on `listener` until `shutdown` resolves, then close every walk session with a

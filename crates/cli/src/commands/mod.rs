@@ -11,6 +11,7 @@ mod info;
 mod map;
 mod pvs;
 mod serve;
+mod tiles;
 mod truth;
 
 use crate::cli::{Cli, Command};
@@ -32,5 +33,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         c @ Command::Map { .. } => map::run(c, quiet),
         c @ Command::Bench { .. } => bench::run(c, quiet),
         c @ Command::Serve { .. } => serve::run(c, quiet),
+        c @ Command::Tiles { .. } => tiles::run(c, quiet),
     }
 }

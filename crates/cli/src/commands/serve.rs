@@ -22,6 +22,7 @@ pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
         token,
         resolution,
         workers,
+        tiles,
     } = cmd
     else {
         unreachable!("dispatched by commands::run")
@@ -97,7 +98,14 @@ pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
             .await
             .with_context(|| format!("cannot listen on {addr}"))?;
         let local = listener.local_addr()?;
-        let server = Server::new(scene.clone(), source, config);
+        let mut server = Server::new(scene.clone(), source, config);
+        if let Some(dir) = &tiles {
+            let t = sightline_server::tiles::TilesState::open(dir, scene.fingerprint())
+                .map_err(|e| anyhow::anyhow!("--tiles: {e}"))?;
+            let routes = sightline_server::tiles::router(server.state().clone(), Arc::new(t));
+            server.merge_routes(routes);
+            eprintln!("sightline: tileset {} at /tiles/", dir.display());
+        }
         // The e2e test reads this line to find the port of `--addr 127.0.0.1:0`.
         println!(
             "sightline: serving {} objects, {cells} cells, method {} ({}{}) on http://{local}/",

@@ -14,6 +14,7 @@ pub mod mesh_bounds;
 pub mod obj;
 pub mod osm;
 pub mod project;
+pub mod tileset;
 pub mod validate;
 
 use crate::Scene;
@@ -77,6 +78,8 @@ pub fn load(path: &Path, opts: &ImportOptions) -> Result<Scene, ImportError> {
                 .map_err(|e| ImportError::Format(format!("invalid JSON: {e}")))?;
             if root.get("type").and_then(serde_json::Value::as_str) == Some("CityJSON") {
                 cityjson::from_value(&root, opts)
+            } else if tileset::is_tileset(&root) {
+                tileset::from_value(&root, path)
             } else {
                 geojson::from_value(&root, opts)
             }
