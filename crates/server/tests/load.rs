@@ -34,7 +34,6 @@ async fn concurrent_walkers_on_loopback() {
     let speed: f64 = env("LOAD_SPEED", 14.0);
     let delay_ms: u64 = env("LOAD_DELAY_MS", 5);
     let scene = Arc::new(block_city(blocks));
-    let size_m = blocks as f64 * 40.0 + 20.0;
     let src = near_source(scene.clone(), cell_m, 80.0, delay_ms);
     let s = TestServer::start(
         scene.clone(),
@@ -46,7 +45,14 @@ async fn concurrent_walkers_on_loopback() {
     )
     .await;
     let walk = Walk {
-        area: [0.0, 0.0, size_m, size_m],
+        // Inside the scene's bounds (the city is not square: its last row has no street
+        // beyond it).
+        area: [
+            scene.bounds.min.x,
+            scene.bounds.min.y,
+            scene.bounds.max.x,
+            scene.bounds.max.y,
+        ],
         speed_m_s: speed,
         hz: 10.0,
         until: Instant::now() + Duration::from_secs_f64(seconds),
