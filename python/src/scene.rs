@@ -419,6 +419,18 @@ pub fn truth_options(samples: Option<u32>, resolution: Option<u32>) -> PyResult<
     Ok(opts)
 }
 
+/// Check a method name and its options as `build` would, without preparing anything.
+#[pyfunction]
+#[pyo3(signature = (method, resolution=None, sweep=false, planes=None))]
+pub fn check_method(
+    method: &str,
+    resolution: Option<u32>,
+    sweep: bool,
+    planes: Option<u32>,
+) -> PyResult<()> {
+    method_options(method, resolution, sweep, planes).map(|_| ())
+}
+
 /// Parse `"x0,y0,z0,x1,y1,z1"` into six numbers, with the CLI's message.
 #[pyfunction]
 pub fn parse_cell(text: &str) -> PyResult<[f64; 6]> {
