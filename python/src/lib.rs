@@ -24,10 +24,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("CellError", py.get_type::<errors::CellError>())?;
     m.add("MethodError", py.get_type::<errors::MethodError>())?;
     m.add("PvsFileError", py.get_type::<errors::PvsFileError>())?;
-    m.add(
-        "METHOD_NAMES",
-        sightline_methods::METHOD_NAMES.to_vec(),
-    )?;
+    m.add("METHOD_NAMES", sightline_methods::METHOD_NAMES.to_vec())?;
     m.add_class::<scene::NativeScene>()?;
     m.add_class::<store::NativePvsFile>()?;
     m.add_function(wrap_pyfunction!(scene::parse_cell, m)?)?;

@@ -76,7 +76,10 @@ pub fn method_options(
         }
     }
     if resolution == Some(0) {
-        return Err(err(Kind::Method, "resolution must be a positive number of pixels"));
+        return Err(err(
+            Kind::Method,
+            "resolution must be a positive number of pixels",
+        ));
     }
     Ok(MethodOptions {
         resolution_px: resolution,
@@ -94,7 +97,7 @@ pub fn cell(a: [f64; 6]) -> PyResult<ViewCell> {
 /// Cells from the little-endian bytes of an N×6 `f64` array.
 pub fn cells_from_bytes(bytes: &[u8]) -> PyResult<Vec<ViewCell>> {
     const CELL_BYTES: usize = 6 * 8;
-    if bytes.len() % CELL_BYTES != 0 {
+    if !bytes.len().is_multiple_of(CELL_BYTES) {
         return Err(err(Kind::Cell, "cells must be an N×6 array of numbers"));
     }
     bytes
@@ -208,8 +211,9 @@ impl NativeScene {
         }
         // Prepared outside the lock so that other methods stay usable meanwhile; two
         // threads racing for the same key both prepare and one result is kept.
-        let m: Arc<dyn VisibilityMethod> =
-            Arc::from(sightline_methods::create(name, self.scene.clone(), opts).map_err(method_err)?);
+        let m: Arc<dyn VisibilityMethod> = Arc::from(
+            sightline_methods::create(name, self.scene.clone(), opts).map_err(method_err)?,
+        );
         let mut cache = self.methods.lock().map_err(|_| poisoned())?;
         Ok(cache.entry(key).or_insert(m).clone())
     }
@@ -231,7 +235,9 @@ impl NativeScene {
     #[staticmethod]
     #[pyo3(signature = (path, crs_name=None))]
     fn load(py: Python<'_>, path: PathBuf, crs_name: Option<&str>) -> PyResult<Self> {
-        let opts = ImportOptions { crs: crs(crs_name)? };
+        let opts = ImportOptions {
+            crs: crs(crs_name)?,
+        };
         let scene = detached(py, || {
             sightline_scene::import::load(&path, &opts)
                 .map_err(|e| err(Kind::Scene, format!("cannot load {}: {e}", path.display())))
@@ -242,8 +248,15 @@ impl NativeScene {
     /// Import GeoJSON text (the `.geojson` importer, every rule included).
     #[staticmethod]
     #[pyo3(signature = (text, name, crs_name=None))]
-    fn from_geojson(py: Python<'_>, text: &str, name: String, crs_name: Option<&str>) -> PyResult<Self> {
-        let opts = ImportOptions { crs: crs(crs_name)? };
+    fn from_geojson(
+        py: Python<'_>,
+        text: &str,
+        name: String,
+        crs_name: Option<&str>,
+    ) -> PyResult<Self> {
+        let opts = ImportOptions {
+            crs: crs(crs_name)?,
+        };
         let scene = detached(py, || {
             sightline_scene::import::geojson::parse(text.as_bytes(), &opts)
                 .map_err(|e| err(Kind::Scene, format!("cannot load {name}: {e}")))
@@ -287,7 +300,13 @@ impl NativeScene {
     }
 
     /// The viewcell grid (`sightline cells`) as little-endian `f64` bytes, 6 per cell.
-    fn cells<'py>(&self, py: Python<'py>, size: f64, z0: f64, z1: f64) -> PyResult<Bound<'py, PyBytes>> {
+    fn cells<'py>(
+        &self,
+        py: Python<'py>,
+        size: f64,
+        z0: f64,
+        z1: f64,
+    ) -> PyResult<Bound<'py, PyBytes>> {
         if !(size.is_finite() && size > 0.0) {
             return Err(err(
                 Kind::Cell,
@@ -302,7 +321,10 @@ impl NativeScene {
         }
         let grid = detached(py, || {
             cells::grid_cells(&self.scene, size, z0, z1).map_err(|e| {
-                err(Kind::Cell, format!("cannot make cells for {}: {e}", self.name))
+                err(
+                    Kind::Cell,
+                    format!("cannot make cells for {}: {e}", self.name),
+                )
             })
         })?;
         Ok(PyBytes::new(py, &cells_to_bytes(&grid)))
@@ -321,7 +343,9 @@ impl NativeScene {
     ) -> PyResult<Bound<'py, PyBytes>> {
         let c = self::cell(cell)?;
         let opts = method_options(method, resolution, sweep, planes)?;
-        let ids = detached(py, || self.method(method, &opts)?.pvs(&c).map_err(method_err))?;
+        let ids = detached(py, || {
+            self.method(method, &opts)?.pvs(&c).map_err(method_err)
+        })?;
         Ok(PyBytes::new(py, &ids_to_bytes(&ids)))
     }
 

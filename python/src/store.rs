@@ -211,7 +211,10 @@ pub fn check(
     let pool = pool(threads)?;
     let (m, picked): (Arc<dyn VisibilityMethod>, Vec<ViewCell>) = match (pvs, method) {
         (Some(_), Some(_)) => {
-            return Err(err(Kind::Method, "check takes a .pvs file or a method, not both"))
+            return Err(err(
+                Kind::Method,
+                "check takes a .pvs file or a method, not both",
+            ))
         }
         (None, None) => return Err(err(Kind::Method, "check needs method=NAME or a .pvs file")),
         (Some(file), None) => {
@@ -231,7 +234,11 @@ pub fn check(
             f.check_scene(&scene.scene).map_err(|e| {
                 err(
                     Kind::Pvs,
-                    format!("{} does not belong to {}: {e}", file.display(), scene.name()),
+                    format!(
+                        "{} does not belong to {}: {e}",
+                        file.display(),
+                        scene.name()
+                    ),
                 )
             })?;
             let stored = f.stored();
@@ -366,7 +373,9 @@ impl NativePvsFile {
 
     /// The index of the cell containing `(x, y, z)`, if any.
     fn locate(&self, x: f64, y: f64, z: f64) -> Option<usize> {
-        guarded(|| Ok(self.file.locate(DVec3::new(x, y, z)))).ok().flatten()
+        guarded(|| Ok(self.file.locate(DVec3::new(x, y, z))))
+            .ok()
+            .flatten()
     }
 
     /// The set of cell `index`, as little-endian `u32` bytes.
