@@ -157,9 +157,10 @@ class Scene:
         ``height`` names the column of top heights (metres above the ground; 0 makes a
         flat object), ``min_height`` the optional column of base heights, ``name`` an
         optional column of object names. Row ``k`` becomes feature ``k`` (warnings name
-        it). The CRS may be any projected CRS in metres or a geographic one (reprojected
-        to WGS84 lon/lat, then projected as the CLI does); without a CRS the coordinates
-        are detected as the CLI does. Every validation and repair rule is the GeoJSON
+        it). The CRS may be any projected CRS in metres, or a geographic one (reprojected
+        to WGS84 lon/lat, then projected as the CLI does). Without a CRS, or with
+        EPSG:4326 (which GeoPandas reports for every GeoJSON file), lon/lat is detected
+        from the coordinates as the CLI does. Every validation and repair rule is the GeoJSON
         importer's.
 
         >>> import geopandas as gpd                                          # doctest: +SKIP

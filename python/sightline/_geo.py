@@ -23,10 +23,11 @@ def _crs_mode(gdf: Any) -> Tuple[Any, Optional[str]]:
     if crs is None:
         return gdf, None  # detected from the coordinates, as the CLI does
     if crs.is_geographic:
-        epsg = crs.to_epsg()
-        if epsg != 4326 and not crs.equals("OGC:CRS84"):
-            gdf = gdf.to_crs(4326)
-        return gdf, "wgs84"
+        if crs.to_epsg() == 4326 or crs.equals("OGC:CRS84"):
+            # What GeoPandas reports for any GeoJSON file (RFC 7946), lon/lat or not:
+            # detect from the coordinates, as the CLI does for the same file.
+            return gdf, None
+        return gdf.to_crs(4326), "wgs84"
     if crs.is_projected:
         units = {a.unit_name.lower() for a in crs.axis_info[:2]}
         if not units <= {"metre", "meter", "m"}:

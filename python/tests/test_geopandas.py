@@ -89,3 +89,10 @@ def test_non_metric_crs_and_non_frames_raise():
         sightline.Scene.from_geodataframe([1, 2, 3])
     with pytest.raises(SceneError, match="no rows"):
         sightline.Scene.from_geodataframe(frame().iloc[:0])
+
+
+def test_epsg4326_label_on_metric_coordinates_is_detected_as_the_cli():
+    # What gpd.read_file gives for a GeoJSON file in a local metric frame (data/*.geojson).
+    gdf = frame().set_crs(4326, allow_override=True)
+    scene = sightline.Scene.from_geodataframe(gdf)
+    assert scene.info()["bounds"][:2] == [X0, Y0]
