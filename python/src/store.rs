@@ -372,10 +372,8 @@ impl NativePvsFile {
     }
 
     /// The index of the cell containing `(x, y, z)`, if any.
-    fn locate(&self, x: f64, y: f64, z: f64) -> Option<usize> {
+    fn locate(&self, x: f64, y: f64, z: f64) -> PyResult<Option<usize>> {
         guarded(|| Ok(self.file.locate(DVec3::new(x, y, z))))
-            .ok()
-            .flatten()
     }
 
     /// The set of cell `index`, as little-endian `u32` bytes.
