@@ -35,3 +35,14 @@ target/debug/sightline --quiet tiles "$TILES_TMP/city.geojson" --max-features-pe
 node crates/tiles/validate/validate.mjs "$TILES_TMP/tileset"
 rm -rf "$TILES_TMP"
 node crates/server/e2e/tiles.test.mjs
+
+# Python package (python/, PyO3 + maturin) and its pytest suite, Dask tests included, in
+# the repo's .venv. The wheel is built with the dev profile so that it reuses target/;
+# `pip install ./python` for users builds the release profile.
+if [ ! -x .venv/bin/python ]; then python3 -m venv .venv; fi
+if [ ! -f .venv/.requirements-test.txt ] || ! cmp -s python/requirements-test.txt .venv/.requirements-test.txt; then
+  .venv/bin/pip install --quiet -r python/requirements-test.txt
+  cp python/requirements-test.txt .venv/.requirements-test.txt
+fi
+PATH="$PWD/.venv/bin:$PATH" MATURIN_PEP517_ARGS="--profile dev" .venv/bin/pip install --quiet --no-build-isolation --force-reinstall --no-deps ./python
+.venv/bin/python -m pytest python/tests -q
