@@ -27,6 +27,7 @@ pub mod dual_ray;
 pub mod erosion;
 pub mod ext_proj;
 pub(crate) mod kdtree;
+pub(crate) mod occluders;
 pub mod sampled;
 pub(crate) mod seed;
 

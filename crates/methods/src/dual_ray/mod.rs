@@ -191,8 +191,8 @@ impl DualRay {
     /// Prepare the method: fused occluder decompositions along x and y, kd-tree of the
     /// occludees.
     pub fn new(name: &'static str, scene: Arc<Scene>, planarity: Planarity) -> Self {
-        let origin = occluders::local_origin(&scene);
-        let occ = occluders::collect_occluders(&scene, origin);
+        let origin = crate::occluders::local_origin(&scene);
+        let occ = crate::occluders::collect_occluders(&scene, origin);
         let clusters = occluders::clusters(&occ);
         let ((decomp_x, decomp_y), seed) = rayon::join(
             || {
