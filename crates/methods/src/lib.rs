@@ -28,7 +28,7 @@ pub mod erosion;
 pub mod ext_proj;
 pub(crate) mod kdtree;
 pub(crate) mod occluders;
-pub mod sampled;
+mod sampled;
 pub(crate) mod seed;
 
 use serde::{Deserialize, Serialize};

@@ -13,21 +13,21 @@
 //! Every `dual-ray` PVS contains the `dual-ray-exact` PVS of the same cell.
 //!
 //! Pipeline (one module per step):
-//! * [`occluders`] — the occluders: ground-based inner prisms, touching ones fused
+//! * `occluders` — the occluders: ground-based inner prisms, touching ones fused
 //!   (NOTES §1), decomposed into slabs along x and y, once per scene;
 //! * [`crate::kdtree`] — the hierarchical subdivision of the occludees (§3): a node hidden
 //!   from the cell stops the recursion; objects of visible leaves are tested one by one
 //!   (their outer prisms' boxes);
-//! * [`plane`] — reduction of a box-to-box test to a planar problem (§4): upper rims,
+//! * `plane` — reduction of a box-to-box test to a planar problem (§4): upper rims,
 //!   shaft, ceiling plane `T`, occluders cut by `T`, dual ray space `RS`;
-//! * [`discrete`] — §5.2 with exact union coverage per row (NOTES §2), most rows decided
+//! * `discrete` — §5.2 with exact union coverage per row (NOTES §2), most rows decided
 //!   by bit-parallel `u128` rows, refined with per-band lists of the pieces that matter;
-//! * [`exact`] — §5.1 with exact predicates;
+//! * `exact` — §5.1 with exact predicates;
 //! * [`crate::seed`] — objects met first by rays from a few eyes of the cell are reported
 //!   without a test, and so are the kd-nodes holding them (it changes no PVS);
-//! * [`witness`] — a single ray verified clear (exact predicates) answers "visible"
+//! * `witness` — a single ray verified clear (exact predicates) answers "visible"
 //!   without gathering the whole shaft; it changes no answer of either planar method;
-//! * [`vo`] — virtual occluders (Koltun et al. 2000), opt-in
+//! * `vo` — virtual occluders (Koltun et al. 2000), opt-in
 //!   ([`DualRay::with_virtual_occluders`]): a long shaft the near occluders do not
 //!   close is tried strip by strip of the cell, each strip with vertical rectangles on
 //!   planes just beyond it, proven hidden by the box-to-box test (on demand, once per
@@ -61,15 +61,16 @@
 //! assert_eq!(m.pvs(&cell).unwrap(), vec![0]);
 //! ```
 
-pub mod discrete;
-pub mod exact;
-pub mod occluders;
-pub mod plane;
+mod discrete;
+mod exact;
+// Erosion imports the shared prisms through `dual_ray::occluders`.
+pub(crate) mod occluders;
+mod plane;
 mod table1;
-pub mod vo;
-pub(crate) mod witness;
+mod vo;
+mod witness;
 
-pub use table1::{crossing_cells, occluded_area_m2, table1, Table1Row};
+pub use table1::{crossing_cells, table1, Table1Row};
 
 use crate::kdtree::{KdTree, NodeKind};
 use crate::seed::{SeedGrid, SeedScratch};
@@ -83,7 +84,7 @@ use std::sync::Arc;
 use vo::VirtualOccluders;
 
 /// Default ray-space resolution of `dual-ray` (the paper's choice, §6).
-pub const DEFAULT_RESOLUTION: u32 = 128;
+pub(crate) const DEFAULT_RESOLUTION: u32 = 128;
 
 /// The first, partial gathering of occluders covers this fraction of the shaft's length,
 /// at least [`FIRST_MIN_M`], next to the narrower of the two boxes, where the shaft is
@@ -158,7 +159,7 @@ pub struct DualRay {
 }
 
 /// Prepare `dual-ray` or `dual-ray-exact` for `scene`.
-pub fn create(
+pub(crate) fn create(
     name: &'static str,
     scene: Arc<Scene>,
     opts: &MethodOptions,

@@ -26,7 +26,6 @@
 use crate::occluders::{BucketGrid, Occluder};
 use sightline_geom::{orient2d, DVec2, Orientation};
 
-// Erosion reaches the shared prisms through this path.
 pub(crate) use crate::occluders::{collect_occluders, local_origin};
 
 /// Two edges of a stack closer than this (at both slab ends) are the same wall: a party

@@ -721,7 +721,7 @@ fn cut_slab(
 
 /// The `n` equal bands of `[w_lo, w_hi]`, last band first (the refinement stacks pop the
 /// first band first); the last one ends exactly at `w_hi`.
-pub fn bands_rev(w_lo: f64, w_hi: f64, n: usize) -> impl Iterator<Item = (f64, f64)> {
+pub(crate) fn bands_rev(w_lo: f64, w_hi: f64, n: usize) -> impl Iterator<Item = (f64, f64)> {
     let dw = (w_hi - w_lo) / n as f64;
     (0..n).rev().map(move |k| {
         let w0 = w_lo + dw * k as f64;
