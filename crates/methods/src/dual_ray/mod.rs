@@ -260,16 +260,6 @@ impl DualRay {
         self
     }
 
-    /// The planar algorithm in use.
-    pub fn planarity(&self) -> Planarity {
-        self.planarity
-    }
-
-    /// The scene this method was prepared for.
-    pub fn scene(&self) -> &Arc<Scene> {
-        &self.scene
-    }
-
     /// The PVS of `cell` and the counters of its traversal.
     pub fn pvs_with_stats(&self, cell: &ViewCell) -> (Vec<u32>, TraversalStats) {
         let a = self.local(cell);

@@ -47,11 +47,11 @@ mod sweep;
 // The entry type is `ExtProj` with its `Params`; the rest is the surface the ext-proj
 // tests, debugging examples and benchmarks look through (planes, maps, the sweep).
 pub use adaptive::pvs as adaptive_pvs;
-pub use depth_map::{depth_down, pixel_range, DepthMap};
+pub use depth_map::{depth_down, pixel_range, DepthMap, OcclusionMap};
 pub use occludee::occludee_projection;
 pub use occluders::{OccluderSet, Piece};
 pub use planes::{Direction, LocalBox, Plane};
-pub use projection::extended_projection;
+pub use projection::{extended_projection, ConvexOccluder};
 pub use sweep::{Sweep, SweepPlane};
 
 use crate::{MethodError, MethodOptions, VisibilityMethod};
@@ -152,14 +152,14 @@ impl Params {
 /// Default depth-map resolution: the knee of the PVS-size/time curve of the paper's
 /// Fig. 12 on street cells (each doubling past it buys a few per cent of PVS for about
 /// half again the time; the measured curve is in the benchmark report).
-pub const DEFAULT_RESOLUTION_PX: usize = 512;
+pub(crate) const DEFAULT_RESOLUTION_PX: usize = 512;
 
 /// Default extension of the planes for the corner directions. The paper's 1.5
 /// (§6.1: "extended (e.g., by 1.5 used in our tests)") makes every pixel 1.5 times the frustum's;
 /// an occludee's Projection must only fit inside some plane, which 1.2 still allows
 /// at the diagonals. Lyon, 50 street cells of 25 m at 256 px: mean PVS 402 (1.5) →
 /// 371 (1.2); at 512 px with 1.2: 317, Den Haag 519 → 448 (missed 0 everywhere).
-pub const DEFAULT_EXTENSION: f64 = 1.2;
+pub(crate) const DEFAULT_EXTENSION: f64 = 1.2;
 
 /// Default resolution with the sweep (`--resolution` overrides it): the sweep fuses
 /// leaves only where their Projections stay several pixels wide after the K-pixel
@@ -307,7 +307,7 @@ impl PlaneMap {
     /// plane (§6.1 "fully visible"): its rectangles — standard and, with `improved`,
     /// improved — clipped to the map touch no covered pixel. `false` when the box is
     /// not beyond the cell's far face (its views are unbounded).
-    pub fn touches_nothing(&self, b: &Aabb3, improved: bool) -> bool {
+    pub(crate) fn touches_nothing(&self, b: &Aabb3, improved: bool) -> bool {
         projection_touches_nothing(&self.plane, &self.cell, self.map.n, b, improved, |r| {
             self.map.any_covered(r)
         })
