@@ -13,9 +13,9 @@
 //! Every `dual-ray` PVS contains the `dual-ray-exact` PVS of the same cell.
 //!
 //! Pipeline (one module per step):
-//! * `occluders` — the occluders: ground-based inner prisms, touching ones fused
+//! * `occluders` — the ground-based inner prisms of `crate::occluders`, touching ones fused
 //!   (NOTES §1), decomposed into slabs along x and y, once per scene;
-//! * [`crate::kdtree`] — the hierarchical subdivision of the occludees (§3): a node hidden
+//! * `crate::kdtree` — the hierarchical subdivision of the occludees (§3): a node hidden
 //!   from the cell stops the recursion; objects of visible leaves are tested one by one
 //!   (their outer prisms' boxes);
 //! * `plane` — reduction of a box-to-box test to a planar problem (§4): upper rims,
@@ -23,7 +23,7 @@
 //! * `discrete` — §5.2 with exact union coverage per row (NOTES §2), most rows decided
 //!   by bit-parallel `u128` rows, refined with per-band lists of the pieces that matter;
 //! * `exact` — §5.1 with exact predicates;
-//! * [`crate::seed`] — objects met first by rays from a few eyes of the cell are reported
+//! * `crate::seed` — objects met first by rays from a few eyes of the cell are reported
 //!   without a test, and so are the kd-nodes holding them (it changes no PVS);
 //! * `witness` — a single ray verified clear (exact predicates) answers "visible"
 //!   without gathering the whole shaft; it changes no answer of either planar method;
@@ -129,7 +129,7 @@ pub struct TraversalStats {
     pub visible: u64,
     /// Of which settled by a witness ray (without gathering the whole shaft).
     pub witnessed: u64,
-    /// Objects reported without a test: met first by a seed ray ([`crate::seed`]).
+    /// Objects reported without a test: met first by a seed ray (`crate::seed`).
     pub seeded: u64,
     /// Box-to-box tests spent proving the virtual occluders of the cell's strips.
     pub vo_tests: u64,
@@ -253,7 +253,7 @@ impl DualRay {
         self
     }
 
-    /// Turn the seed rays ([`crate::seed`]) on or off (on by default). The PVS is the same
+    /// Turn the seed rays (`crate::seed`) on or off (on by default). The PVS is the same
     /// either way; off, every object and node is proven by its own test.
     pub fn with_seed(mut self, on: bool) -> Self {
         self.use_seed = on;
