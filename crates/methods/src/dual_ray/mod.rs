@@ -244,7 +244,7 @@ impl DualRay {
         }
     }
 
-    /// Turn the cell's strips and their virtual occluders ([`vo`]) on or off
+    /// Turn the cell's strips and their virtual occluders (`vo`) on or off
     /// (off by default: on the generated metropolis their proofs cost more than the
     /// shafts they spare). On, the PVS can only shrink, and stays a superset of the
     /// visible set and of `dual-ray-exact` with them on.

@@ -159,7 +159,7 @@ pub(crate) const DEFAULT_RESOLUTION_PX: usize = 512;
 /// an occludee's Projection must only fit inside some plane, which 1.2 still allows
 /// at the diagonals. Lyon, 50 street cells of 25 m at 256 px: mean PVS 402 (1.5) →
 /// 371 (1.2); at 512 px with 1.2: 317, Den Haag 519 → 448 (missed 0 everywhere).
-pub(crate) const DEFAULT_EXTENSION: f64 = 1.2;
+pub const DEFAULT_EXTENSION: f64 = 1.2;
 
 /// Default resolution with the sweep (`--resolution` overrides it): the sweep fuses
 /// leaves only where their Projections stay several pixels wide after the K-pixel

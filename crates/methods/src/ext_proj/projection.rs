@@ -142,7 +142,7 @@ impl ConvexOccluder {
 /// The extended projection of a convex occluder given by its local vertices onto the
 /// plane `w = x`: the intersection of its views from the cell's vertices (§3.2), with
 /// its extended depth bound (farthest depth minus `x`). `None` when void. Valid only
-/// for an occluder on one side of the plane (see [`plane_safe_projections`]).
+/// for an occluder on one side of the plane (see `plane_safe_projections`).
 pub fn extended_projection(
     vertices: &[DVec3],
     cell: &LocalBox,
