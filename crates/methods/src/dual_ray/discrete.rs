@@ -3,7 +3,7 @@
 //!
 //! The paper draws every `T(v)` shrunk by `√2·a` into an `N × N` bitmap and reports
 //! visibility when a pixel stays black. Shrinking the pieces one by one leaves cracks
-//! along every shared edge of the union (NOTES §2); here the coverage of the *union* is
+//! along every shared edge of the union; here the coverage of the *union* is
 //! computed exactly per row instead:
 //!
 //! * a row is a band `[w0, w1]` of `RS` (`N` bands over `[w_lo, w_hi]`);

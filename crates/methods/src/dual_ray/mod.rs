@@ -2,7 +2,7 @@
 //! *Hardware-accelerated from-region visibility using a dual ray space* (EGWR 2001).
 //!
 //! **Guarantee**: the PVS of a viewcell contains every object visible from the cell's
-//! free space (SPEC §3); it may contain hidden ones.
+//! free space; it may contain hidden ones.
 //!
 //! Methods:
 //! * `dual-ray` — §3 + §4 + §5.2: kd-tree traversal, box-to-box tests reduced to the
@@ -13,14 +13,14 @@
 //! Every `dual-ray` PVS contains the `dual-ray-exact` PVS of the same cell.
 //!
 //! Pipeline (one module per step):
-//! * `occluders` — the ground-based inner prisms of `crate::occluders`, touching ones fused
-//!   (NOTES §1), decomposed into slabs along x and y, once per scene;
+//! * `occluders` — the ground-based inner prisms of `crate::occluders`, touching ones fused,
+//!   decomposed into slabs along x and y, once per scene;
 //! * `crate::kdtree` — the hierarchical subdivision of the occludees (§3): a node hidden
 //!   from the cell stops the recursion; objects of visible leaves are tested one by one
 //!   (their outer prisms' boxes);
 //! * `plane` — reduction of a box-to-box test to a planar problem (§4): upper rims,
 //!   shaft, ceiling plane `T`, occluders cut by `T`, dual ray space `RS`;
-//! * `discrete` — §5.2 with exact union coverage per row (NOTES §2), most rows decided
+//! * `discrete` — §5.2 with exact union coverage per row (no cracks), most rows decided
 //!   by bit-parallel `u128` rows, refined with per-band lists of the pieces that matter;
 //! * `exact` — §5.1 with exact predicates;
 //! * `crate::seed` — objects met first by rays from a few eyes of the cell are reported
@@ -145,7 +145,7 @@ pub struct DualRay {
     name: &'static str,
     planarity: Planarity,
     scene: Arc<Scene>,
-    /// Local frame: scene coordinates minus `origin` (precision, NOTES §3).
+    /// Local frame: scene coordinates minus `origin` (precision).
     origin: DVec2,
     decomp_x: Decomposition,
     decomp_y: Decomposition,

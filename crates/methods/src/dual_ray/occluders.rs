@@ -1,7 +1,7 @@
 //! Fused 2.5D occluders, decomposed into slabs along each axis.
 //!
 //! The planar problems of §4 (Koltun et al. 2001) cut the occluders by the ceiling plane
-//! `T` of a shaft. Touching buildings must act as one occluder there (NOTES §1–2): a
+//! `T` of a shaft. Touching buildings must act as one occluder there: a
 //! party wall whose line is a ray of the shaft would otherwise leave a crack in the dual
 //! ray space. We therefore prepare, once per scene and per axis, a *vertical
 //! decomposition* of the fused height field of every cluster of touching buildings:
