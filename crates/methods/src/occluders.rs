@@ -156,7 +156,8 @@ pub(crate) fn collect_occluders(scene: &Scene, origin: DVec2) -> Vec<Occluder> {
 }
 
 /// The origin of the methods' local frame for `scene` (coordinates minus it keep their
-/// precision when the scene's own coordinates are large): the centre of its bounds, rounded to the metre.
+/// precision when the scene's own coordinates are large): the centre of its bounds,
+/// rounded to the metre.
 pub(crate) fn local_origin(scene: &Scene) -> DVec2 {
     if scene.bounds.is_empty() {
         DVec2::ZERO
