@@ -17,8 +17,8 @@
 //!   occluder).
 //!
 //! Pieces of one cluster therefore only ever meet along `x = const` lines or inside a
-//! stack, and a stack is fused at query time (by the planar problems of `plane`). Lines `x = const` are
-//! never rays of a shaft along `x`, so no crack can appear there.
+//! stack, and a stack is fused at query time (by the planar problems of `plane`). Lines
+//! `x = const` are never rays of a shaft along `x`, so no crack can appear there.
 //!
 //! The prisms are the shared ground-based ones of [`crate::occluders`] (Observation 1 of
 //! the paper needs occluders that contain the vertical wall under their top).
