@@ -16,8 +16,8 @@
 
 use sightline_geom::ViewCell;
 use sightline_methods::check::{ground_truth, street_cells, TruthOptions};
-use sightline_methods::ext_proj::depth_map::{depth_down, pixel_range};
-use sightline_methods::ext_proj::occludee::occludee_projection;
+use sightline_methods::ext_proj::occludee_projection;
+use sightline_methods::ext_proj::{depth_down, pixel_range};
 use sightline_methods::ext_proj::{ExtProj, Params};
 use sightline_methods::{create, MethodOptions, VisibilityMethod};
 use sightline_scene::import::{load, ImportOptions};

@@ -13,11 +13,11 @@
 //! object, or list the pieces covering one plane point (see the code).
 
 use sightline_geom::{DVec3, ViewCell};
-use sightline_methods::ext_proj::depth_map::pixel_range;
-use sightline_methods::ext_proj::occludee::occludee_projection;
-use sightline_methods::ext_proj::planes::{Direction, Plane};
-use sightline_methods::ext_proj::projection::extended_projection;
-use sightline_methods::ext_proj::{adaptive, ExtProj, Params, PlaneMap};
+use sightline_methods::ext_proj::extended_projection;
+use sightline_methods::ext_proj::occludee_projection;
+use sightline_methods::ext_proj::pixel_range;
+use sightline_methods::ext_proj::{adaptive_pvs, ExtProj, Params, PlaneMap};
+use sightline_methods::ext_proj::{Direction, Plane};
 use sightline_scene::import;
 use std::sync::Arc;
 
@@ -72,7 +72,7 @@ fn main() {
             };
             let t = std::time::Instant::now();
             sizes.push(match ext.params.adaptive_budget {
-                Some(b) => adaptive::pvs(&ext, &cell, &all, b).len(),
+                Some(b) => adaptive_pvs(&ext, &cell, &all, b).len(),
                 None => ext.pvs_among(&cell, &all).len(),
             });
             ms.push(t.elapsed().as_secs_f64() * 1e3);

@@ -171,7 +171,7 @@ fn main() {
         }
         if let (Some(dir), true) = (std::env::var_os("SWEEP_DEBUG"), m.params.sweep) {
             let dir = std::path::PathBuf::from(dir);
-            let sw = sightline_methods::ext_proj::sweep::Sweep::run(&m, &cells[0], None);
+            let sw = sightline_methods::ext_proj::Sweep::run(&m, &cells[0], None);
             for (k, sp) in sw.planes.iter().enumerate() {
                 let n = sp.umbra.n;
                 let mut img = format!("P5 {n} {n} 255\n").into_bytes();

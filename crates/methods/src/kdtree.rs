@@ -2,7 +2,7 @@
 //! node holds the tight bounding box of the objects below it, so a child's box is
 //! contained in its parent's, and a node hidden from the viewcell hides its whole
 //! subtree. Used by `dual-ray` (§3 of Koltun et al. 2001) and by the occludee hierarchy
-//! of `ext-proj` ([`crate::ext_proj::hierarchy`], §2.4 and §6.1 of Durand et al. 2000).
+//! of `ext-proj` (its `hierarchy`, §2.4 and §6.1 of Durand et al. 2000).
 
 use sightline_geom::Aabb3;
 

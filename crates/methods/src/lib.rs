@@ -7,6 +7,20 @@
 //! The guarantee of every conservative method: it may report a hidden object as
 //! visible, never a visible object as hidden.
 //!
+//! Architecture (imports go one way, from the methods down to the shared leaves; erosion
+//! still names the prisms through their re-export in `dual_ray`):
+//! * [`erosion`] — Décoret, Debunne & Sillion 2003: `erosion`, `erosion-segment`,
+//!   `erosion-cell`, `shrink-sphere` (after Wonka et al. 2000) and `erosion-rays` (§7.1);
+//! * [`dual_ray`] — Koltun, Chrysanthou & Cohen-Or 2001: `dual-ray` (§5.2) and
+//!   `dual-ray-exact` (§5.1), with the opt-in virtual occluders of Koltun et al. 2000;
+//! * [`ext_proj`] — Durand et al. 2000: `ext-proj`, extended projections and the sweep;
+//! * `sampled` — the ground truth of [`check`] as a method (not conservative); the `all`
+//!   baseline lives in this file;
+//! * shared leaves: `occluders` (the ground-based prisms and bucket grid of `dual-ray`,
+//!   the seed and erosion; `ext-proj` cuts its own convex pieces), `seed` (seed rays of
+//!   `dual-ray` and erosion, on `occluders`), `kdtree` (the occludee hierarchy of
+//!   `dual-ray` and `ext-proj`) and [`check`] (ground truth and comparison).
+//!
 //! ```
 //! use std::sync::Arc;
 //! use sightline_methods::{create, MethodOptions};
@@ -26,9 +40,10 @@ pub mod check;
 pub mod dual_ray;
 pub mod erosion;
 pub mod ext_proj;
-pub(crate) mod kdtree;
-pub mod sampled;
-pub(crate) mod seed;
+mod kdtree;
+mod occluders;
+mod sampled;
+mod seed;
 
 use serde::{Deserialize, Serialize};
 use sightline_geom::ViewCell;

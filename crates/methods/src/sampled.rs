@@ -14,13 +14,13 @@ use sightline_scene::Scene;
 use std::sync::Arc;
 
 /// The sampled method prepared for a scene.
-pub struct Sampled {
+pub(crate) struct Sampled {
     truth: TruthScene,
     opts: TruthOptions,
 }
 
 impl Sampled {
-    pub fn new(scene: &Scene, opts: TruthOptions) -> Self {
+    pub(crate) fn new(scene: &Scene, opts: TruthOptions) -> Self {
         Sampled {
             truth: TruthScene::new(scene),
             opts,
@@ -29,7 +29,7 @@ impl Sampled {
 }
 
 /// Prepare `sampled` for `scene`.
-pub fn create(
+pub(crate) fn create(
     name: &'static str,
     scene: Arc<Scene>,
     opts: &MethodOptions,

@@ -33,7 +33,7 @@
 //! of the scene could reach further on, so azimuths into a facade cost a few buckets and
 //! only the ones along open streets run far.
 
-use crate::dual_ray::occluders::{local_rings, BucketGrid, Occluder, GROUND_EPS_M};
+use crate::occluders::{local_rings, BucketGrid, Occluder, GROUND_EPS_M};
 use sightline_geom::{Aabb3, DVec2};
 use sightline_scene::Scene;
 
@@ -491,7 +491,7 @@ fn crossings(edges: &[[DVec2; 2]], eye: DVec2, d: DVec2) -> Option<(f64, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dual_ray::occluders::collect_occluders;
+    use crate::occluders::collect_occluders;
     use sightline_geom::{DVec3, Polygon};
     use sightline_scene::Object;
 

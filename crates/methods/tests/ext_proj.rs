@@ -175,8 +175,8 @@ fn improved_projection_is_no_larger() {
 /// one (supporting lines, §4) lies inside it, and the building is hidden indeed.
 #[test]
 fn improved_projection_hides_an_occludee_in_front_of_the_plane() {
-    use sightline_methods::ext_proj::planes::{Direction, Plane};
     use sightline_methods::ext_proj::PlaneMap;
+    use sightline_methods::ext_proj::{Direction, Plane};
     let scene = Arc::new(Scene::from_objects(vec![
         Object::rect_block(20.0, -3.0, 21.0, 3.0, 6.0), // 0 wall
         Object::rect_block(21.5, -1.0, 22.5, 1.0, 3.0), // 1 just behind it

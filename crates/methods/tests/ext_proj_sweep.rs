@@ -113,7 +113,7 @@ fn small_forest_sweep() -> (ExtProj, ViewCell) {
 #[test]
 fn leaves_fill_the_occlusion_maps() {
     let (e, c) = small_forest_sweep();
-    let sw = sightline_methods::ext_proj::sweep::Sweep::run(&e, &c, None);
+    let sw = sightline_methods::ext_proj::Sweep::run(&e, &c, None);
     let best = sw.planes.iter().map(|p| p.umbra.count()).max().unwrap_or(0);
     assert!(best > 5000, "{best}");
 }
@@ -179,7 +179,7 @@ fn sweep_culls_the_dense_generated_forest_without_missing() {
 #[test]
 fn improved_projection_on_sweep_planes() {
     let (e, c) = small_forest_sweep();
-    let sw = sightline_methods::ext_proj::sweep::Sweep::run(&e, &c, None);
+    let sw = sightline_methods::ext_proj::Sweep::run(&e, &c, None);
     let mut hidden = 0;
     for i in 0..40 {
         for j in 0..30 {
@@ -230,11 +230,11 @@ fn leaves_crossing_a_plane_project_their_front_part() {
                 ..Params::default()
             },
         );
-        let sw = sightline_methods::ext_proj::sweep::Sweep::run(&e, &c, None);
+        let sw = sightline_methods::ext_proj::Sweep::run(&e, &c, None);
         let plane = sw
             .planes
             .iter()
-            .find(|p| p.plane.dir == sightline_methods::ext_proj::planes::Direction::PosX)
+            .find(|p| p.plane.dir == sightline_methods::ext_proj::Direction::PosX)
             .expect("a +x plane");
         assert!((plane.plane.x - 3.0).abs() < 0.01, "{}", plane.plane.x);
         let n = plane.umbra.n;

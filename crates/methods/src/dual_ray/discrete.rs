@@ -3,7 +3,7 @@
 //!
 //! The paper draws every `T(v)` shrunk by `√2·a` into an `N × N` bitmap and reports
 //! visibility when a pixel stays black. Shrinking the pieces one by one leaves cracks
-//! along every shared edge of the union (NOTES §2); here the coverage of the *union* is
+//! along every shared edge of the union; here the coverage of the *union* is
 //! computed exactly per row instead:
 //!
 //! * a row is a band `[w0, w1]` of `RS` (`N` bands over `[w_lo, w_hi]`);
@@ -22,7 +22,7 @@
 //! [`START_LEVEL`]); only bands that are not fully covered are split in two, down to `N`
 //! bands. A black band at resolution `N` means "visible".
 
-use super::plane::{Planar, Scratch};
+use super::plane::{Band, Planar, Scratch};
 
 /// Number of bands of the first level of the paper (§5.2: 16² first).
 pub(crate) const FIRST_LEVEL: u32 = 16;
@@ -218,19 +218,6 @@ pub(crate) fn covers(iv: &mut [(f64, f64)], a: f64, b: f64, eps: f64) -> bool {
         }
     }
     false
-}
-
-/// A band of the refinement of [`hidden`]: rows `[w0, w1]` at level `n`, the pieces
-/// that can still matter (`lists[first..first + len]`, or all when `len == ALL`) and the
-/// `full` row of the parent band.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Band {
-    w0: f64,
-    w1: f64,
-    n: u32,
-    first: u32,
-    len: u32,
-    seed: u128,
 }
 
 const ALL: u32 = u32::MAX;

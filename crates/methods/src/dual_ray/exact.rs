@@ -10,7 +10,7 @@
 //!   candidate ray, accepted only if Shewchuk's exact `orient2d` puts every vertex of
 //!   every piece strictly on one side of it and strictly separates the corners of both
 //!   boxes. A ray strictly clear of finitely many closed convex pieces has an open
-//!   neighbourhood of clear rays: the boxes see each other robustly (SPEC §3).
+//!   neighbourhood of clear rays: the boxes see each other robustly.
 //!
 //! Only where neither certificate appears down to bands of width `2^-MAX_DEPTH` of the
 //! ray space (a single grazing ray between two occluders, or a crossing of two pieces

@@ -2,7 +2,7 @@
 //! *Hardware-accelerated from-region visibility using a dual ray space* (EGWR 2001).
 //!
 //! **Guarantee**: the PVS of a viewcell contains every object visible from the cell's
-//! free space (SPEC §3); it may contain hidden ones.
+//! free space; it may contain hidden ones.
 //!
 //! Methods:
 //! * `dual-ray` — §3 + §4 + §5.2: kd-tree traversal, box-to-box tests reduced to the
@@ -13,21 +13,21 @@
 //! Every `dual-ray` PVS contains the `dual-ray-exact` PVS of the same cell.
 //!
 //! Pipeline (one module per step):
-//! * [`occluders`] — the occluders: ground-based inner prisms, touching ones fused
-//!   (NOTES §1), decomposed into slabs along x and y, once per scene;
-//! * [`crate::kdtree`] — the hierarchical subdivision of the occludees (§3): a node hidden
+//! * `occluders` — the ground-based inner prisms of `crate::occluders`, touching ones fused,
+//!   decomposed into slabs along x and y, once per scene;
+//! * `crate::kdtree` — the hierarchical subdivision of the occludees (§3): a node hidden
 //!   from the cell stops the recursion; objects of visible leaves are tested one by one
 //!   (their outer prisms' boxes);
-//! * [`plane`] — reduction of a box-to-box test to a planar problem (§4): upper rims,
+//! * `plane` — reduction of a box-to-box test to a planar problem (§4): upper rims,
 //!   shaft, ceiling plane `T`, occluders cut by `T`, dual ray space `RS`;
-//! * [`discrete`] — §5.2 with exact union coverage per row (NOTES §2), most rows decided
+//! * `discrete` — §5.2 with exact union coverage per row (no cracks), most rows decided
 //!   by bit-parallel `u128` rows, refined with per-band lists of the pieces that matter;
-//! * [`exact`] — §5.1 with exact predicates;
-//! * [`crate::seed`] — objects met first by rays from a few eyes of the cell are reported
+//! * `exact` — §5.1 with exact predicates;
+//! * `crate::seed` — objects met first by rays from a few eyes of the cell are reported
 //!   without a test, and so are the kd-nodes holding them (it changes no PVS);
-//! * [`witness`] — a single ray verified clear (exact predicates) answers "visible"
+//! * `witness` — a single ray verified clear (exact predicates) answers "visible"
 //!   without gathering the whole shaft; it changes no answer of either planar method;
-//! * [`vo`] — virtual occluders (Koltun et al. 2000), opt-in
+//! * `vo` — virtual occluders (Koltun et al. 2000), opt-in
 //!   ([`DualRay::with_virtual_occluders`]): a long shaft the near occluders do not
 //!   close is tried strip by strip of the cell, each strip with vertical rectangles on
 //!   planes just beyond it, proven hidden by the box-to-box test (on demand, once per
@@ -61,15 +61,16 @@
 //! assert_eq!(m.pvs(&cell).unwrap(), vec![0]);
 //! ```
 
-pub mod discrete;
-pub mod exact;
-pub mod occluders;
-pub mod plane;
+mod discrete;
+mod exact;
+// Erosion imports the shared prisms through `dual_ray::occluders`.
+pub(crate) mod occluders;
+mod plane;
 mod table1;
-pub mod vo;
-pub(crate) mod witness;
+mod vo;
+mod witness;
 
-pub use table1::{crossing_cells, occluded_area_m2, table1, Table1Row};
+pub use table1::{crossing_cells, table1, Table1Row};
 
 use crate::kdtree::{KdTree, NodeKind};
 use crate::seed::{SeedGrid, SeedScratch};
@@ -83,7 +84,7 @@ use std::sync::Arc;
 use vo::VirtualOccluders;
 
 /// Default ray-space resolution of `dual-ray` (the paper's choice, §6).
-pub const DEFAULT_RESOLUTION: u32 = 128;
+pub(crate) const DEFAULT_RESOLUTION: u32 = 128;
 
 /// The first, partial gathering of occluders covers this fraction of the shaft's length,
 /// at least [`FIRST_MIN_M`], next to the narrower of the two boxes, where the shaft is
@@ -128,7 +129,7 @@ pub struct TraversalStats {
     pub visible: u64,
     /// Of which settled by a witness ray (without gathering the whole shaft).
     pub witnessed: u64,
-    /// Objects reported without a test: met first by a seed ray ([`crate::seed`]).
+    /// Objects reported without a test: met first by a seed ray (`crate::seed`).
     pub seeded: u64,
     /// Box-to-box tests spent proving the virtual occluders of the cell's strips.
     pub vo_tests: u64,
@@ -144,7 +145,7 @@ pub struct DualRay {
     name: &'static str,
     planarity: Planarity,
     scene: Arc<Scene>,
-    /// Local frame: scene coordinates minus `origin` (precision, NOTES §3).
+    /// Local frame: scene coordinates minus `origin` (precision).
     origin: DVec2,
     decomp_x: Decomposition,
     decomp_y: Decomposition,
@@ -158,7 +159,7 @@ pub struct DualRay {
 }
 
 /// Prepare `dual-ray` or `dual-ray-exact` for `scene`.
-pub fn create(
+pub(crate) fn create(
     name: &'static str,
     scene: Arc<Scene>,
     opts: &MethodOptions,
@@ -191,8 +192,8 @@ impl DualRay {
     /// Prepare the method: fused occluder decompositions along x and y, kd-tree of the
     /// occludees.
     pub fn new(name: &'static str, scene: Arc<Scene>, planarity: Planarity) -> Self {
-        let origin = occluders::local_origin(&scene);
-        let occ = occluders::collect_occluders(&scene, origin);
+        let origin = crate::occluders::local_origin(&scene);
+        let occ = crate::occluders::collect_occluders(&scene, origin);
         let clusters = occluders::clusters(&occ);
         let ((decomp_x, decomp_y), seed) = rayon::join(
             || {
@@ -243,7 +244,7 @@ impl DualRay {
         }
     }
 
-    /// Turn the cell's strips and their virtual occluders ([`vo`]) on or off
+    /// Turn the cell's strips and their virtual occluders (`vo`) on or off
     /// (off by default: on the generated metropolis their proofs cost more than the
     /// shafts they spare). On, the PVS can only shrink, and stays a superset of the
     /// visible set and of `dual-ray-exact` with them on.
@@ -252,21 +253,11 @@ impl DualRay {
         self
     }
 
-    /// Turn the seed rays ([`crate::seed`]) on or off (on by default). The PVS is the same
+    /// Turn the seed rays (`crate::seed`) on or off (on by default). The PVS is the same
     /// either way; off, every object and node is proven by its own test.
     pub fn with_seed(mut self, on: bool) -> Self {
         self.use_seed = on;
         self
-    }
-
-    /// The planar algorithm in use.
-    pub fn planarity(&self) -> Planarity {
-        self.planarity
-    }
-
-    /// The scene this method was prepared for.
-    pub fn scene(&self) -> &Arc<Scene> {
-        &self.scene
     }
 
     /// The PVS of `cell` and the counters of its traversal.

@@ -29,7 +29,7 @@
 //! `g_p(w) = (y_p - t_p w) / (1 - t_p)`. Every `g_p` is non-increasing in `w`, so the
 //! rays blocked by `C` for *every* `w` of a band `[w0, w1]` are exactly
 //! `u ∈ [H_C(w0), G_C(w1)]` ([`Planar::piece_band`]). This is what makes the union
-//! coverage of [`super::discrete`] exact per row, without cracks.
+//! coverage of `discrete` exact per row, without cracks.
 
 use super::occluders::{Axis, Decomposition, Slab, Trap};
 use sightline_geom::{orient2d, Aabb3, DVec2, Orientation};
@@ -234,6 +234,19 @@ impl Default for Rect {
     }
 }
 
+/// A band of the refinement of `discrete::hidden`: rows `[w0, w1]` at level `n`, the pieces
+/// that can still matter (`lists[first..first + len]`, or all when `len == ALL`) and the
+/// `full` row of the parent band.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Band {
+    pub w0: f64,
+    pub w1: f64,
+    pub n: u32,
+    pub first: u32,
+    pub len: u32,
+    pub seed: u128,
+}
+
 /// Per-query scratch memory, reused across tests of one cell.
 #[derive(Default)]
 pub(crate) struct Scratch {
@@ -244,8 +257,8 @@ pub(crate) struct Scratch {
     pub kept: Vec<(f64, f64)>,
     pub intervals: Vec<(f64, f64)>,
     pub bands: Vec<(f64, f64, u32)>,
-    /// Refinement of [`super::discrete::hidden`]: bands and their piece lists.
-    pub refine: Vec<super::discrete::Band>,
+    /// Refinement of `discrete::hidden`: bands and their piece lists.
+    pub refine: Vec<Band>,
     pub lists: Vec<u32>,
     /// Pieces of the ungathered part of a shaft, met by a candidate ray.
     pub far: Vec<Piece>,
@@ -708,7 +721,7 @@ fn cut_slab(
 
 /// The `n` equal bands of `[w_lo, w_hi]`, last band first (the refinement stacks pop the
 /// first band first); the last one ends exactly at `w_hi`.
-pub fn bands_rev(w_lo: f64, w_hi: f64, n: usize) -> impl Iterator<Item = (f64, f64)> {
+pub(crate) fn bands_rev(w_lo: f64, w_hi: f64, n: usize) -> impl Iterator<Item = (f64, f64)> {
     let dw = (w_hi - w_lo) / n as f64;
     (0..n).rev().map(move |k| {
         let w0 = w_lo + dw * k as f64;

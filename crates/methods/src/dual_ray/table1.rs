@@ -54,7 +54,7 @@ pub fn crossing_cells(scene: &Scene, size_m: f64, n: usize) -> Vec<ViewCell> {
 }
 
 /// Total footprint area (m²) of the objects *not* in `pvs` (sorted): the occluded area.
-pub fn occluded_area_m2(scene: &Scene, pvs: &[u32]) -> f64 {
+pub(crate) fn occluded_area_m2(scene: &Scene, pvs: &[u32]) -> f64 {
     scene
         .objects
         .iter()

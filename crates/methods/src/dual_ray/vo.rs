@@ -271,7 +271,7 @@ impl VoPlane {
 
 /// The virtual occluders of one cell, proven on demand.
 #[derive(Clone, Debug, Default)]
-pub struct VirtualOccluders {
+pub(crate) struct VirtualOccluders {
     cell: Option<Aabb3>,
     planes: Vec<VoPlane>,
     heights: [f64; LEVELS],
@@ -280,11 +280,6 @@ pub struct VirtualOccluders {
 }
 
 impl VirtualOccluders {
-    /// No virtual occluder: hides nothing.
-    pub fn none() -> Self {
-        VirtualOccluders::default()
-    }
-
     /// The (not yet proven) virtual occluders of the cell `a` (local frame) on planes
     /// normal to `axes`, on both sides, in a scene whose occludees lie in `scene`
     /// (`scene.min.z` at most their lowest point).
@@ -356,7 +351,7 @@ impl VirtualOccluders {
     }
 
     /// Segments proven hidden so far (at any height).
-    pub fn count(&self) -> usize {
+    pub(crate) fn count(&self) -> usize {
         self.planes
             .iter()
             .map(|p| p.memo.values().filter(|v| **v).count())

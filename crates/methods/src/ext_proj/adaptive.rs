@@ -12,7 +12,7 @@
 //! objects, down to a minimum horizontal cell size.
 
 use super::ExtProj;
-use sightline_geom::{DVec3, ViewCell};
+use sightline_geom::ViewCell;
 
 /// PVS of `cell` among `candidates`, subdividing while it exceeds `budget` objects.
 pub fn pvs(ext: &ExtProj, cell: &ViewCell, candidates: &[u32], budget: usize) -> Vec<u32> {
@@ -41,28 +41,4 @@ pub fn pvs(ext: &ExtProj, cell: &ViewCell, candidates: &[u32], budget: usize) ->
     out.sort_unstable();
     out.dedup();
     out
-}
-
-/// Number of leaf cells the adaptive recursion would visit for `cell` (for reports).
-pub fn leaf_count(ext: &ExtProj, cell: &ViewCell, budget: usize) -> usize {
-    fn rec(ext: &ExtProj, cell: &ViewCell, cand: &[u32], budget: usize) -> usize {
-        let p = ext.pvs_among(cell, cand);
-        let s: DVec3 = cell.size();
-        let axis = if s.x >= s.y { 0 } else { 1 };
-        if p.len() <= budget || s[axis] * 0.5 < ext.params.adaptive_min_m {
-            return 1;
-        }
-        let mid = 0.5 * (cell.min[axis] + cell.max[axis]);
-        let mut lo_max = cell.max;
-        lo_max[axis] = mid;
-        let mut hi_min = cell.min;
-        hi_min[axis] = mid;
-        [(cell.min, lo_max), (hi_min, cell.max)]
-            .iter()
-            .filter_map(|(a, b)| ViewCell::new(*a, *b).ok())
-            .map(|c| rec(ext, &c, &p, budget))
-            .sum()
-    }
-    let all: Vec<u32> = (0..ext.scene.objects.len() as u32).collect();
-    rec(ext, cell, &all, budget)
 }

@@ -19,7 +19,7 @@ use sightline_geom::DVec2;
 const MERGE_TOL_PX: f64 = 1e-7;
 
 /// Round an occluder depth up to `f32`.
-pub fn depth_up(d: f64) -> f32 {
+pub(crate) fn depth_up(d: f64) -> f32 {
     let f = d as f32;
     if (f as f64) < d {
         f.next_up()
@@ -39,14 +39,14 @@ pub fn depth_down(d: f64) -> f32 {
 }
 
 /// Collects the Projections drawn on one plane, then resolves coverage and depth.
-pub struct CoverageBuilder {
+pub(crate) struct CoverageBuilder {
     n: usize,
     /// Per row: (left, right, depth) intervals fully covered over the row's height.
     rows: Vec<Vec<Band>>,
 }
 
 impl CoverageBuilder {
-    pub fn new(n: usize) -> Self {
+    pub(crate) fn new(n: usize) -> Self {
         CoverageBuilder {
             n,
             rows: vec![Vec::new(); n],
@@ -54,7 +54,7 @@ impl CoverageBuilder {
     }
 
     /// Add a convex polygon in continuous pixel coordinates, at extended depth `depth`.
-    pub fn add_convex(&mut self, poly: &[DVec2], depth: f32) {
+    pub(crate) fn add_convex(&mut self, poly: &[DVec2], depth: f32) {
         if poly.len() < 3 {
             return;
         }
@@ -117,7 +117,7 @@ impl CoverageBuilder {
     /// of a component is an interval at each ordinate. A component covers the
     /// abscissae `[min L, max R]`, with `L = max(l₀, l₁)` and `R = min(r₀, r₁)` of
     /// its members; a pixel inside it is entirely covered.
-    pub fn finish(mut self) -> DepthMap {
+    pub(crate) fn finish(mut self) -> DepthMap {
         let n = self.n;
         let mut depth = vec![f32::INFINITY; n * n];
         let mut comps: Vec<Component> = Vec::new();
@@ -250,7 +250,7 @@ pub struct DepthMap {
 
 impl DepthMap {
     /// `n` must be a power of two.
-    pub fn new(n: usize, depth: Vec<f32>) -> Self {
+    pub(crate) fn new(n: usize, depth: Vec<f32>) -> Self {
         let covered = SummedArea::new(n, |k| depth[k].is_finite());
         let mut levels: Vec<(usize, Vec<f32>)> = Vec::new();
         let mut cur = (n, depth);
@@ -284,13 +284,13 @@ impl DepthMap {
     }
 
     /// Whether some pixel of the inclusive range is covered.
-    pub fn any_covered(&self, r: [usize; 4]) -> bool {
+    pub(crate) fn any_covered(&self, r: [usize; 4]) -> bool {
         self.covered.count_in(r) > 0
     }
 
     /// Whether every pixel of the inclusive range `[i0, i1] × [j0, j1]` has a depth
     /// strictly below `d`.
-    pub fn all_below(&self, i0: usize, j0: usize, i1: usize, j1: usize, d: f32) -> bool {
+    pub(crate) fn all_below(&self, i0: usize, j0: usize, i1: usize, j1: usize, d: f32) -> bool {
         let top = self.levels.len() - 1;
         self.node_below(top, 0, 0, [i0, j0, i1, j1], d)
     }
@@ -341,13 +341,13 @@ pub fn pixel_range(min: DVec2, max: DVec2, n: usize) -> Option<[usize; 4]> {
 /// A summed-area table of a binary `n × n` map: the number of set pixels in any
 /// rectangle in O(1).
 #[derive(Clone)]
-pub struct SummedArea {
+pub(crate) struct SummedArea {
     n: usize,
     sat: Vec<u32>,
 }
 
 impl SummedArea {
-    pub fn new(n: usize, set: impl Fn(usize) -> bool) -> Self {
+    pub(crate) fn new(n: usize, set: impl Fn(usize) -> bool) -> Self {
         let w = n + 1;
         let mut sat = vec![0u32; w * w];
         for j in 0..n {
@@ -361,7 +361,7 @@ impl SummedArea {
     }
 
     /// Set pixels in the inclusive range `[i0, i1] × [j0, j1]`.
-    pub fn count_in(&self, r: [usize; 4]) -> usize {
+    pub(crate) fn count_in(&self, r: [usize; 4]) -> usize {
         let w = self.n + 1;
         let [i0, j0, i1, j1] = r;
         (self.sat[(j1 + 1) * w + i1 + 1] + self.sat[j0 * w + i0]
@@ -370,14 +370,14 @@ impl SummedArea {
     }
 
     /// Set pixels in the whole map.
-    pub fn count(&self) -> usize {
+    pub(crate) fn count(&self) -> usize {
         self.sat[(self.n + 1) * (self.n + 1) - 1] as usize
     }
 }
 
 /// The pixels a closed rectangle (continuous pixel coordinates) touches, clipped to
 /// the map, or `None` when it misses the map.
-pub fn clipped_pixel_range(min: DVec2, max: DVec2, n: usize) -> Option<[usize; 4]> {
+pub(crate) fn clipped_pixel_range(min: DVec2, max: DVec2, n: usize) -> Option<[usize; 4]> {
     let nf = n as f64;
     if !(max.x >= 0.0 && max.y >= 0.0 && min.x <= nf && min.y <= nf) {
         return None;
@@ -395,19 +395,19 @@ pub struct OcclusionMap {
 }
 
 impl OcclusionMap {
-    pub fn new(n: usize, black: Vec<bool>) -> Self {
+    pub(crate) fn new(n: usize, black: Vec<bool>) -> Self {
         let sat = SummedArea::new(n, |k| black[k]);
         OcclusionMap { n, black, sat }
     }
 
     /// Whether every pixel of the inclusive range is black.
-    pub fn all_black(&self, r: [usize; 4]) -> bool {
+    pub(crate) fn all_black(&self, r: [usize; 4]) -> bool {
         let [i0, j0, i1, j1] = r;
         self.sat.count_in(r) == (i1 + 1 - i0) * (j1 + 1 - j0)
     }
 
     /// Whether some pixel of the inclusive range is black.
-    pub fn any_black(&self, r: [usize; 4]) -> bool {
+    pub(crate) fn any_black(&self, r: [usize; 4]) -> bool {
         self.sat.count_in(r) > 0
     }
 

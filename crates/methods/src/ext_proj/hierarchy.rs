@@ -14,7 +14,7 @@ use sightline_geom::Aabb3;
 
 /// What a test concludes about a node's box.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Verdict {
+pub(crate) enum Verdict {
     Hidden,
     FullyVisible,
     Unknown,
@@ -22,13 +22,13 @@ pub enum Verdict {
 
 /// A bounding-box hierarchy over a set of objects (the kd-tree of `dual-ray`, one box
 /// per object).
-pub struct Hierarchy {
+pub(crate) struct Hierarchy {
     tree: KdTree,
 }
 
 impl Hierarchy {
     /// The hierarchy over `ids`, each with its box `bounds(id)`.
-    pub fn build(ids: &[u32], bounds: impl Fn(u32) -> Aabb3) -> Self {
+    pub(crate) fn build(ids: &[u32], bounds: impl Fn(u32) -> Aabb3) -> Self {
         Hierarchy {
             tree: KdTree::build(ids.iter().map(|&i| (i, bounds(i))).collect()),
         }
@@ -37,7 +37,7 @@ impl Hierarchy {
     /// The objects not proven hidden: nodes are tested from the root with `test`; a
     /// hidden node drops its objects, a fully visible one keeps them all, and the
     /// objects of the leaves reached are kept when `visible(id)`. Sorted.
-    pub fn visible(
+    pub(crate) fn visible(
         &self,
         test: impl Fn(&Aabb3) -> Verdict,
         visible: impl Fn(u32) -> bool,

@@ -10,22 +10,22 @@
 //!
 //! Pipeline per cell (§6.1):
 //! 1. occluder selection by solid angle through a precomputed relevance tree
-//!    ([`occluders`]); occluders are the fused inner prisms of the objects;
+//!    (`occluders`); occluders are the fused inner prisms of the objects;
 //! 2. for each of the six directions of the cell, a projection plane placed by the
-//!    filled-pixels heuristic and extended by 1.5 ([`planes`]);
+//!    filled-pixels heuristic and extended by 1.5 (`planes`);
 //! 3. extended projections of convex occluder pieces (intersection of the views from
-//!    the cell's vertices) and slices of the pieces cut by the plane ([`projection`]),
+//!    the cell's vertices) and slices of the pieces cut by the plane (`projection`),
 //!    drawn with union-aware inner coverage into an extended depth map and its
-//!    max pyramid ([`depth_map`]);
+//!    max pyramid (`depth_map`);
 //! 4. occludee boxes projected with separating / supporting lines, or the improved
-//!    projection of §4 ([`occludee`]), tested hierarchically against the pyramid:
+//!    projection of §4 (`occludee`), tested hierarchically against the pyramid:
 //!    through a box hierarchy over the objects that stops at hidden and at fully
-//!    visible nodes ([`hierarchy`]), then within each object by splitting its boxes;
-//! 5. with `sweep`, the occlusion sweep of §5 ([`sweep`]): successive planes, the
+//!    visible nodes (`hierarchy`), then within each object by splitting its boxes;
+//! 5. with `sweep`, the occlusion sweep of §5 ([`Sweep`]): successive planes, the
 //!    previous occlusion map re-projected (eroded by the inverse image of the
 //!    equivalent planar cell) and new occluders — including every mesh triangle, the
 //!    leaves of a forest — added at each plane;
-//! 6. the adaptive subdivision of §6.1 ([`adaptive`]); by default (budget 0, minimum
+//! 6. the adaptive subdivision of §6.1 (`adaptive`); by default (budget 0, minimum
 //!    25 m) it splits only cells wider than 50 m, down to 25 m.
 //!
 //! Parameters: `resolution_px` (default 512 — the paper's 256 of §7.1 leaves 25 m city
@@ -34,24 +34,30 @@
 //! pixel grows with it, see [`DEFAULT_EXTENSION`]), `sweep`, `planes` (number of sweep
 //! planes per direction, default 15 as in §7.2).
 
-pub mod adaptive;
-pub mod depth_map;
+mod adaptive;
+mod depth_map;
 pub mod experiments;
-pub mod hierarchy;
-pub mod occludee;
-pub mod occluders;
-pub mod planes;
-pub mod projection;
-pub mod sweep;
+mod hierarchy;
+mod occludee;
+mod occluders;
+mod planes;
+mod projection;
+mod sweep;
+
+// The entry type is `ExtProj` with its `Params`; the rest is the surface the ext-proj
+// tests, debugging examples and benchmarks look through (planes, maps, the sweep).
+pub use adaptive::pvs as adaptive_pvs;
+pub use depth_map::{depth_down, pixel_range, DepthMap, OcclusionMap};
+pub use occludee::occludee_projection;
+pub use occluders::{OccluderSet, Piece};
+pub use planes::{Direction, LocalBox, Plane};
+pub use projection::{extended_projection, ConvexOccluder};
+pub use sweep::{Sweep, SweepPlane};
 
 use crate::{MethodError, MethodOptions, VisibilityMethod};
-use depth_map::{
-    clipped_pixel_range, depth_down, depth_up, pixel_range, CoverageBuilder, DepthMap,
-};
+use depth_map::{clipped_pixel_range, depth_up, CoverageBuilder};
 use hierarchy::{Hierarchy, Verdict};
-use occludee::occludee_projection;
-use occluders::OccluderSet;
-use planes::{candidate_positions, Direction, LocalBox, Plane};
+use planes::candidate_positions;
 use projection::{plane_safe_projections, FACE_CLEARANCE_M};
 use sightline_geom::{Aabb3, DVec2, DVec3, ViewCell};
 use sightline_scene::Scene;
@@ -79,7 +85,7 @@ pub struct Params {
     pub sweep_start_m: f64,
     /// The sweep planes reach at least this far beyond the cell's far face (m): with
     /// too few planes for the §5.2 spacing of `kernel_px` to get there, the kernel is
-    /// enlarged until they do ([`sweep::plane_positions`]).
+    /// enlarged until they do (`sweep::plane_positions`).
     pub sweep_reach_m: f64,
     /// Solid-angle threshold (sr) of occluder relevance (§6.1).
     pub solid_angle: f64,
@@ -146,10 +152,10 @@ impl Params {
 /// Default depth-map resolution: the knee of the PVS-size/time curve of the paper's
 /// Fig. 12 on street cells (each doubling past it buys a few per cent of PVS for about
 /// half again the time; the measured curve is in the benchmark report).
-pub const DEFAULT_RESOLUTION_PX: usize = 512;
+pub(crate) const DEFAULT_RESOLUTION_PX: usize = 512;
 
 /// Default extension of the planes for the corner directions. The paper's 1.5
-/// (§6.1, [`planes::PLANE_EXTENSION`]) makes every pixel 1.5 times the frustum's;
+/// (§6.1: "extended (e.g., by 1.5 used in our tests)") makes every pixel 1.5 times the frustum's;
 /// an occludee's Projection must only fit inside some plane, which 1.2 still allows
 /// at the diagonals. Lyon, 50 street cells of 25 m at 256 px: mean PVS 402 (1.5) →
 /// 371 (1.2); at 512 px with 1.2: 317, Den Haag 519 → 448 (missed 0 everywhere).
@@ -159,16 +165,16 @@ pub const DEFAULT_EXTENSION: f64 = 1.2;
 /// leaves only where their Projections stay several pixels wide after the K-pixel
 /// kernel of each step; on the dense forest (0.5 m cells, 15 planes) it culls ~1 % of
 /// the trees at 256 px and ~43 % at 512.
-pub const SWEEP_RESOLUTION_PX: usize = 512;
+pub(crate) const SWEEP_RESOLUTION_PX: usize = 512;
 
 /// Resolution (pixels per side) of the depth maps on which candidate planes are scored.
-pub const SCORING_PX: usize = 128;
+pub(crate) const SCORING_PX: usize = 128;
 
 /// Candidate planes are scored with at most this many occluder pieces (the largest).
-pub const SCORING_PIECES: usize = 1500;
+pub(crate) const SCORING_PIECES: usize = 1500;
 
 /// Candidate planes just inside an occluder's near face lie this far behind it (m).
-pub const SLICE_INSET_M: f64 = 0.25;
+pub(crate) const SLICE_INSET_M: f64 = 0.25;
 
 /// Whether the local box `b` meets the frustum of the planes of a direction: the
 /// cell's cross-section grown by the distance from its near face and scaled by
@@ -194,7 +200,7 @@ pub struct ExtProj {
 }
 
 /// Prepare `ext-proj` for `scene`.
-pub fn create(
+pub(crate) fn create(
     name: &'static str,
     scene: Arc<Scene>,
     opts: &MethodOptions,
@@ -247,7 +253,7 @@ impl PlaneMap {
     /// coordinate of the viewpoint, extreme at the cell's corners. Tighter than the
     /// box for a rotated building; its extended depth is its nearest vertex's. With
     /// `improved`, a hull between the cell and the plane uses the improved Projection
-    /// of §4 on its vertices' 2D projections ([`occludee::improved_segment_points`]).
+    /// of §4 on its vertices' 2D projections (`occludee::improved_segment_points`).
     pub fn hides_points(&self, points: &[DVec3], improved: bool) -> bool {
         let x = self.plane.x;
         if points.is_empty() {
@@ -301,7 +307,7 @@ impl PlaneMap {
     /// plane (§6.1 "fully visible"): its rectangles — standard and, with `improved`,
     /// improved — clipped to the map touch no covered pixel. `false` when the box is
     /// not beyond the cell's far face (its views are unbounded).
-    pub fn touches_nothing(&self, b: &Aabb3, improved: bool) -> bool {
+    pub(crate) fn touches_nothing(&self, b: &Aabb3, improved: bool) -> bool {
         projection_touches_nothing(&self.plane, &self.cell, self.map.n, b, improved, |r| {
             self.map.any_covered(r)
         })
@@ -414,7 +420,7 @@ impl ExtProj {
     /// on a depth map at reduced resolution drawn with the largest pieces. The planes are then kept greedily, each
     /// maximizing the boxes not hidden by the planes kept before it (at most
     /// `planes_per_direction`; none when no candidate hides anything).
-    pub fn choose_planes(
+    pub(crate) fn choose_planes(
         &self,
         dir: Direction,
         lc: &LocalBox,
@@ -505,7 +511,7 @@ impl ExtProj {
     /// Occluders made only of other objects are left out: they are hidden from a
     /// parent cell, hence from `cell` (§6.1, "we also use the PVS of the parent cell to
     /// cull hidden occluders"), and leaving occluders out is always conservative.
-    pub fn plane_maps_for(&self, cell: &ViewCell, candidates: &[u32]) -> Vec<PlaneMap> {
+    pub(crate) fn plane_maps_for(&self, cell: &ViewCell, candidates: &[u32]) -> Vec<PlaneMap> {
         let ids = self
             .occluders
             .relevant_among(&cell.aabb(), self.occluder_filter(candidates));
@@ -542,7 +548,7 @@ impl ExtProj {
 
     /// Whether a box is hidden on some plane; boxes that fail are split along their
     /// longest axis and both halves tried (hierarchical occludee test).
-    pub fn box_hidden(
+    pub(crate) fn box_hidden(
         &self,
         b: &Aabb3,
         maps: &[PlaneMap],

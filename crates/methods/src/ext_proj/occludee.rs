@@ -22,7 +22,7 @@ use sightline_geom::{Aabb2, DVec2};
 
 /// The 2D bounding segment of the union of views (§3.1) on the line `w = x`, for a
 /// cell `[cw0,cw1]×[cu0,cu1]` and an occludee `[ow0,ow1]×[ou0,ou1]` with `ow0 > cw1`.
-pub fn bounding_segment(
+pub(crate) fn bounding_segment(
     cw: [f64; 2],
     cu: [f64; 2],
     ow: [f64; 2],
@@ -94,7 +94,7 @@ fn supporting_line_at(cells: [DVec2; 2], occs: &[DVec2], sign: f64, x: f64) -> O
 /// the vanishing point. The 2D argument of §4.2 (the union of the triangles spanned
 /// by the cell and a point of the segment is the region between the supporting lines,
 /// which contains the occludee) holds for any occludee between those lines.
-pub fn improved_segment_points(
+pub(crate) fn improved_segment_points(
     cw: [f64; 2],
     cu: [f64; 2],
     occ: &[DVec2],
@@ -116,7 +116,7 @@ pub fn improved_segment_points(
 /// `w = x` (`ow1 ≤ x`): the segment between the intersections of the lower and
 /// upper supporting lines with the plane, or — beyond the vanishing point, when the
 /// lower intersection lies above the upper one — their mid-point.
-pub fn improved_segment(
+pub(crate) fn improved_segment(
     cw: [f64; 2],
     cu: [f64; 2],
     ow: [f64; 2],

@@ -20,12 +20,12 @@
 
 use super::projection::{clip_halfplane, polygon_area, ConvexOccluder};
 use rstar::{primitives::GeomWithData, primitives::Rectangle, RTree, AABB};
-use sightline_geom::{boolean, Aabb3, DVec2, DVec3, Polygon};
+use sightline_geom::{boolean, Aabb3, DVec2, Polygon};
 use sightline_scene::{Geometry, Scene};
 use std::collections::HashMap;
 
 /// Inward move of boundary edges of fused footprints (two grid steps of the booleans).
-pub const INWARD_M: f64 = 2.0 * boolean::GRID_M;
+pub(crate) const INWARD_M: f64 = 2.0 * boolean::GRID_M;
 
 /// Prisms whose base is at most this high stand on the ground and join the fusion
 /// (exactly the ground: a gap under a raised prism must stay open).
@@ -77,7 +77,7 @@ pub struct OccluderSet {
 }
 
 impl OccluderSet {
-    pub fn build(scene: &Scene, solid_angle: f64) -> Self {
+    pub(crate) fn build(scene: &Scene, solid_angle: f64) -> Self {
         let mut pieces = Vec::new();
         // Ground-standing inner prisms, by height.
         let mut ground: Vec<(&Polygon, f64)> = Vec::new();
@@ -174,7 +174,7 @@ impl OccluderSet {
 
     /// Mesh triangles whose footprint meets the box `area` (the sweep's reach) and
     /// whose object is among `candidates` (sorted ids; `None` = all).
-    pub fn triangles_in(&self, area: &Aabb3, candidates: Option<&[u32]>) -> Vec<u32> {
+    pub(crate) fn triangles_in(&self, area: &Aabb3, candidates: Option<&[u32]>) -> Vec<u32> {
         in_envelope(&self.tri_tree, &self.triangles, area, candidates)
     }
 }
@@ -269,7 +269,7 @@ fn bounds_tree(pieces: &[Piece]) -> RTree<Entry> {
 /// chosen level `h`, the union of the footprints of prisms with `top ≥ h`. A level
 /// is kept only where it differs from the next higher one (components identical to
 /// a taller component are dominated by it).
-pub fn fused_levels(ground: &[(&Polygon, f64)]) -> Vec<(f64, Vec<Polygon>)> {
+pub(crate) fn fused_levels(ground: &[(&Polygon, f64)]) -> Vec<(f64, Vec<Polygon>)> {
     if ground.is_empty() {
         return vec![];
     }
@@ -332,7 +332,7 @@ fn key(p: DVec2) -> (u64, u64) {
 /// then remove internal diagonals while the merged piece stays convex. Boundary edges
 /// (those of the input polygon) are moved inward by [`INWARD_M`]. Returns each piece
 /// (counter-clockwise) with, per edge, whether it lies on the input's boundary.
-pub fn convex_pieces(poly: &Polygon) -> Vec<(Vec<DVec2>, Vec<bool>)> {
+pub(crate) fn convex_pieces(poly: &Polygon) -> Vec<(Vec<DVec2>, Vec<bool>)> {
     let poly = poly.clone().normalized();
     let boundary: std::collections::HashSet<EdgeKey> =
         poly.edges().map(|(a, b)| (key(a), key(b))).collect();
@@ -443,14 +443,10 @@ fn shrink_boundary(p: &[DVec2], flags: &[bool], d: f64) -> Vec<DVec2> {
     out
 }
 
-/// World-space 3D vertices' bounding box helper for tests and callers.
-pub fn bounds_of(points: &[DVec3]) -> Aabb3 {
-    Aabb3::from_points(points)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use sightline_geom::DVec3;
     use sightline_scene::Object;
 
     #[test]

@@ -32,7 +32,7 @@ impl Direction {
     ];
 
     /// World point → local `(w, u, v)`.
-    pub fn to_local(self, p: DVec3) -> DVec3 {
+    pub(crate) fn to_local(self, p: DVec3) -> DVec3 {
         match self {
             Direction::PosX => DVec3::new(p.x, p.y, p.z),
             Direction::NegX => DVec3::new(-p.x, p.y, p.z),
@@ -60,7 +60,7 @@ impl Direction {
 
     /// World `xy` → local 2D coordinates of a footprint: `(w, u)` for horizontal
     /// directions, `(u, v)` for vertical ones.
-    pub fn footprint_to_local(self, p: DVec2) -> DVec2 {
+    pub(crate) fn footprint_to_local(self, p: DVec2) -> DVec2 {
         match self {
             Direction::PosX => DVec2::new(p.x, p.y),
             Direction::NegX => DVec2::new(-p.x, p.y),
@@ -70,13 +70,8 @@ impl Direction {
         }
     }
 
-    /// Whether [`Direction::footprint_to_local`] reverses orientation.
-    pub fn footprint_mirrored(self) -> bool {
-        matches!(self, Direction::NegX | Direction::PosY)
-    }
-
     /// Local depth interval of a world height interval (vertical directions only).
-    pub fn height_to_depth(self, base: f64, top: f64) -> (f64, f64) {
+    pub(crate) fn height_to_depth(self, base: f64, top: f64) -> (f64, f64) {
         match self {
             Direction::NegZ => (-top, -base),
             _ => (base, top),
@@ -104,14 +99,10 @@ pub struct LocalBox {
 
 impl LocalBox {
     /// The 8 corners (duplicates for flat boxes are harmless).
-    pub fn corners(&self) -> [DVec3; 8] {
+    pub(crate) fn corners(&self) -> [DVec3; 8] {
         sightline_geom::Aabb3::new(self.min, self.max).corners()
     }
 }
-
-/// Default extension factor of the planes for the corner directions (§6.1: "the
-/// planes are extended (e.g., by 1.5 used in our tests)").
-pub const PLANE_EXTENSION: f64 = 1.5;
 
 /// A finite projection plane `w = x` of one direction of one cell, with its pixel grid.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -148,7 +139,7 @@ impl Plane {
     }
 
     /// Size of a pixel in plane units.
-    pub fn pixel_size(&self) -> DVec2 {
+    pub(crate) fn pixel_size(&self) -> DVec2 {
         self.rect.size() / self.n as f64
     }
 
@@ -168,7 +159,7 @@ impl Plane {
 /// perspective projection from a point onto the shared projection plane). Requires
 /// `p.x > e.x`.
 #[inline]
-pub fn view(e: DVec3, p: DVec3, x: f64) -> DVec2 {
+pub(crate) fn view(e: DVec3, p: DVec3, x: f64) -> DVec2 {
     let t = (x - e.x) / (p.x - e.x);
     DVec2::new(e.y + (p.y - e.y) * t, e.z + (p.z - e.z) * t)
 }
@@ -176,7 +167,7 @@ pub fn view(e: DVec3, p: DVec3, x: f64) -> DVec2 {
 /// Candidate plane positions for the placement heuristic: "we place a candidate
 /// plane just behind each occluder" (§6.1). `far_depths` are the occluders' far
 /// depths; at most `max` evenly spread candidates are kept, nearest first.
-pub fn candidate_positions(far_depths: &[f64], max: usize) -> Vec<f64> {
+pub(crate) fn candidate_positions(far_depths: &[f64], max: usize) -> Vec<f64> {
     let mut c: Vec<f64> = far_depths
         .iter()
         .copied()

@@ -19,14 +19,14 @@ use sightline_geom::{DVec2, DVec3};
 
 /// Minimum clearance between a clipped occluder and the cell's far face along the
 /// depth axis, so every view is a finite central projection.
-pub const FACE_CLEARANCE_M: f64 = 1e-3;
+pub(crate) const FACE_CLEARANCE_M: f64 = 1e-3;
 
 /// How far below the ground a ground-standing prism is extended for the horizontal
 /// directions. The ground is opaque (no sight line meets the ground below
 /// z = 0), so prism ∪ ground contains the extended prism, which stays convex; without
 /// it a plane in front of a wall would lose the rays that pass under the wall's view
 /// of its own foot and hit the ground.
-pub const BELOW_GROUND_M: f64 = 100.0;
+pub(crate) const BELOW_GROUND_M: f64 = 100.0;
 
 fn below_ground(base: f64) -> f64 {
     if base <= 0.0 {
@@ -52,7 +52,7 @@ pub enum ConvexOccluder {
 impl ConvexOccluder {
     /// The occluder's vertices in the local frame of `dir`, clipped to the half-space
     /// `w ≥ w_min` (a convex subset of a convex occluder still occludes: conservative).
-    pub fn local_vertices(&self, dir: Direction, w_min: f64) -> Vec<DVec3> {
+    pub(crate) fn local_vertices(&self, dir: Direction, w_min: f64) -> Vec<DVec3> {
         match self {
             ConvexOccluder::Prism {
                 footprint,
@@ -142,7 +142,7 @@ impl ConvexOccluder {
 /// The extended projection of a convex occluder given by its local vertices onto the
 /// plane `w = x`: the intersection of its views from the cell's vertices (§3.2), with
 /// its extended depth bound (farthest depth minus `x`). `None` when void. Valid only
-/// for an occluder on one side of the plane (see [`plane_safe_projections`]).
+/// for an occluder on one side of the plane (see `plane_safe_projections`).
 pub fn extended_projection(
     vertices: &[DVec3],
     cell: &LocalBox,
@@ -190,7 +190,7 @@ pub fn extended_projection(
 /// sees `q` uncovered although every vertex of the cell has it covered. The parts
 /// are subsets of the occluder, so their Projections stay conservative; the slice
 /// (drawn separately) joins them.
-pub fn plane_safe_projections(
+pub(crate) fn plane_safe_projections(
     vertices: &[DVec3],
     cell: &LocalBox,
     x: f64,
@@ -214,7 +214,7 @@ pub fn plane_safe_projections(
 /// the vertices on each side plus the plane's intersections with every segment
 /// between two vertices (a superset of the hull's edges, whose extra points lie
 /// inside the hull, so each part's hull is exact).
-pub fn split_at(vertices: &[DVec3], x: f64) -> (Vec<DVec3>, Vec<DVec3>) {
+pub(crate) fn split_at(vertices: &[DVec3], x: f64) -> (Vec<DVec3>, Vec<DVec3>) {
     let mut front: Vec<DVec3> = vertices.iter().copied().filter(|p| p.x <= x).collect();
     let mut back: Vec<DVec3> = vertices.iter().copied().filter(|p| p.x >= x).collect();
     for (i, a) in vertices.iter().enumerate() {
@@ -233,7 +233,7 @@ pub fn split_at(vertices: &[DVec3], x: f64) -> (Vec<DVec3>, Vec<DVec3>) {
 
 /// Area of the intersection of two convex polygons' bounding ranges is not needed;
 /// this is the signed area of a polygon (positive when counter-clockwise).
-pub fn polygon_area(p: &[DVec2]) -> f64 {
+pub(crate) fn polygon_area(p: &[DVec2]) -> f64 {
     if p.len() < 3 {
         return 0.0;
     }
@@ -247,7 +247,7 @@ pub fn polygon_area(p: &[DVec2]) -> f64 {
 
 /// Convex hull (Andrew's monotone chain), counter-clockwise, without collinear points.
 /// Sorts `pts` in place.
-pub fn convex_hull(pts: &mut [DVec2]) -> Vec<DVec2> {
+pub(crate) fn convex_hull(pts: &mut [DVec2]) -> Vec<DVec2> {
     pts.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
     let n = pts.len();
     if n < 3 {
@@ -273,7 +273,7 @@ pub fn convex_hull(pts: &mut [DVec2]) -> Vec<DVec2> {
 }
 
 /// The part of a convex polygon where `n · p ≥ c` (Sutherland–Hodgman, one edge).
-pub fn clip_halfplane(poly: &[DVec2], n: DVec2, c: f64) -> Vec<DVec2> {
+pub(crate) fn clip_halfplane(poly: &[DVec2], n: DVec2, c: f64) -> Vec<DVec2> {
     let k = poly.len();
     let mut out = Vec::with_capacity(k + 1);
     for i in 0..k {
@@ -312,7 +312,7 @@ fn clip_polygon3_w(poly: &[DVec3], w_min: f64) -> Vec<DVec3> {
 }
 
 /// Intersection of two convex counter-clockwise polygons (clip `a` by every edge of `b`).
-pub fn intersect_convex(a: &[DVec2], b: &[DVec2]) -> Vec<DVec2> {
+pub(crate) fn intersect_convex(a: &[DVec2], b: &[DVec2]) -> Vec<DVec2> {
     let mut out = a.to_vec();
     let k = b.len();
     for i in 0..k {

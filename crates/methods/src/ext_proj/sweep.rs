@@ -48,7 +48,7 @@ use super::{occludee::occludee_projection, projection_touches_nothing, ExtProj};
 use sightline_geom::{Aabb3, DVec2, DVec3, ViewCell};
 
 /// How far beyond the cell the sweep reaches at most (m).
-pub const MAX_REACH_M: f64 = 400.0;
+pub(crate) const MAX_REACH_M: f64 = 400.0;
 
 /// One plane of the sweep with its occlusion map.
 pub struct SweepPlane {
@@ -76,7 +76,7 @@ struct LocalOccluder {
 }
 
 impl Sweep {
-    pub fn empty() -> Self {
+    pub(crate) fn empty() -> Self {
         Sweep { planes: vec![] }
     }
 
@@ -110,7 +110,7 @@ impl Sweep {
 
     /// Whether the Projection of the box meets no black pixel on any sweep plane
     /// (§6.1 "fully visible"; see [`super::PlaneMap::touches_nothing`]).
-    pub fn touches_nothing(&self, b: &Aabb3, improved: bool) -> bool {
+    pub(crate) fn touches_nothing(&self, b: &Aabb3, improved: bool) -> bool {
         self.planes.iter().all(|sp| {
             projection_touches_nothing(&sp.plane, &sp.cell, sp.umbra.n, b, improved, |r| {
                 sp.umbra.any_black(r)
@@ -139,7 +139,7 @@ impl Sweep {
 
 /// Depths (local `w`) of at most `k` sweep planes from `x0`, spaced as in §5.2 with
 /// kernel `kernel` (pixels), not beyond `x1`.
-pub fn spaced_positions(
+pub(crate) fn spaced_positions(
     ext: &ExtProj,
     lc: &LocalBox,
     x0: f64,
@@ -176,7 +176,7 @@ pub fn spaced_positions(
 }
 
 /// Largest kernel (pixels) [`plane_positions`] grows to.
-pub const MAX_KERNEL_PX: usize = 64;
+pub(crate) const MAX_KERNEL_PX: usize = 64;
 
 /// Depths of the `k` sweep planes of a direction: the §5.2 spacing with the kernel
 /// `K = kernel_px`, or — when those `k` planes would stop short of
@@ -185,7 +185,13 @@ pub const MAX_KERNEL_PX: usize = 64;
 /// `K = 5` a few planes all crowd within a metre or two of the first one (five
 /// planes from 2 m span 2–3.5 m for a 0.5 m cell at 512 px), where the leaves in
 /// front have barely begun to fuse, and wider cells (smaller steps) fare worse.
-pub fn plane_positions(ext: &ExtProj, lc: &LocalBox, x0: f64, x1: f64, k: usize) -> Vec<f64> {
+pub(crate) fn plane_positions(
+    ext: &ExtProj,
+    lc: &LocalBox,
+    x0: f64,
+    x1: f64,
+    k: usize,
+) -> Vec<f64> {
     let target = x1.min(lc.max.x + ext.params.sweep_reach_m);
     let mut kernel = ext.params.kernel_px.max(2);
     loop {
@@ -199,8 +205,10 @@ pub fn plane_positions(ext: &ExtProj, lc: &LocalBox, x0: f64, x1: f64, k: usize)
 }
 
 /// The equivalent planar cell of §5.1 on the cell's far-face plane `w = cw1`: every
-/// ray from the cell to the plane's rectangle crosses it.
-pub fn equivalent_cell(lc: &LocalBox, plane: &Plane) -> sightline_geom::Aabb2 {
+/// ray from the cell to the plane's rectangle crosses it. The tests check the
+/// re-projection kernel against it.
+#[cfg(test)]
+fn equivalent_cell(lc: &LocalBox, plane: &Plane) -> sightline_geom::Aabb2 {
     let t = (lc.max.x - lc.min.x) / (plane.x - lc.min.x);
     let (r0, r1) = (plane.rect.min, plane.rect.max);
     let c0 = DVec2::new(lc.min.y, lc.min.z);
@@ -226,7 +234,7 @@ pub fn equivalent_cell(lc: &LocalBox, plane: &Plane) -> sightline_geom::Aabb2 {
 /// area table answers "all black?" for a rectangle in O(1)) the cell's own faces give
 /// a kernel several times smaller for a deep cell near the plane, and still every
 /// sight line from the cell to the pixel passes through it.
-pub fn reproject(lc: &LocalBox, from: &Plane, map: &OcclusionMap, to: &Plane) -> Vec<bool> {
+pub(crate) fn reproject(lc: &LocalBox, from: &Plane, map: &OcclusionMap, to: &Plane) -> Vec<bool> {
     let n = to.n;
     let mut out = vec![false; n * n];
     if map.count() == 0 {
@@ -389,7 +397,7 @@ fn sweep_direction(
 /// ground meets the ground first: such pixels are in the umbra. For the horizontal
 /// directions these are the rows whose whole extent lies below z = 0 (`v` is z); for
 /// `-z`, a plane at or below the ground is entirely black.
-pub fn ground_black(plane: &Plane, black: &mut [bool]) {
+pub(crate) fn ground_black(plane: &Plane, black: &mut [bool]) {
     let n = plane.n;
     match plane.dir {
         Direction::PosZ => {}
