@@ -29,14 +29,9 @@
 //! ray grazes an occluder: that object is kept, never dropped, so conservativeness does
 //! not depend on this module at all. Tests compare the PVS with and without the seed.
 //!
-//! Per azimuth the march skips what stays under the running horizon: a bucket whose
-//! tallest prism the ray passes above, and, through a pyramid of the tallest tops over
-//! aligned blocks of 2^k × 2^k buckets (the maximum mipmaps of height-field ray casting),
-//! a whole block at once, jumping to where the ray leaves it. A few towers of a large
-//! city then no longer keep every ray marching across it, bucket by bucket, until it
-//! clears the tallest of them. The jump lands on the very bucket and distance the walk
-//! bucket by bucket would reach (the grid lines are crossed at distances computed from
-//! their index, not accumulated), so the skipping changes no mark.
+//! Per azimuth the march stops once the running horizon is above what the tallest prism
+//! of the scene could reach further on, so azimuths into a facade cost a few buckets and
+//! only the ones along open streets run far.
 
 use crate::dual_ray::occluders::{local_rings, BucketGrid, Occluder, GROUND_EPS_M};
 use sightline_geom::{Aabb3, DVec2};
@@ -101,38 +96,8 @@ pub(crate) struct SeedGrid {
     grid: BucketGrid,
     /// Tallest prism top per bucket.
     bucket_top: Vec<f64>,
-    /// `blocks[k]`: the tallest top per aligned block of 2^(k+1) × 2^(k+1) buckets.
-    blocks: Vec<Level>,
     /// Tallest prism top.
     max_top: f64,
-    /// Whether the march skips whole blocks under the horizon (off only to compare).
-    pub(crate) skip_blocks: bool,
-}
-
-/// One level of the pyramid of tallest tops: `nx × ny` blocks, row-major.
-struct Level {
-    nx: usize,
-    top: Vec<f64>,
-}
-
-/// The tallest tops over aligned blocks of 2 × 2, 4 × 4, … buckets, up to one block
-/// covering the whole `nx × ny` grid.
-fn pyramid(mut nx: usize, mut ny: usize, bucket_top: &[f64]) -> Vec<Level> {
-    let mut levels: Vec<Level> = Vec::new();
-    while nx > 1 || ny > 1 {
-        let (mx, my) = (nx.div_ceil(2), ny.div_ceil(2));
-        let below = levels.last().map_or(bucket_top, |l| &l.top);
-        let mut top = vec![f64::NEG_INFINITY; mx * my];
-        for r in 0..ny {
-            for c in 0..nx {
-                let t = &mut top[(r / 2) * mx + c / 2];
-                *t = t.max(below[r * nx + c]);
-            }
-        }
-        levels.push(Level { nx: mx, top });
-        (nx, ny) = (mx, my);
-    }
-    levels
 }
 
 impl SeedGrid {
@@ -227,12 +192,10 @@ impl SeedGrid {
         let bucket_top = grid.max_per_bucket(|i| prisms[i as usize].reach());
         SeedGrid {
             max_top: prisms.iter().map(|p| p.reach()).fold(0.0, f64::max),
-            blocks: pyramid(grid.nx, grid.ny, &bucket_top),
             prisms,
             edges,
             grid,
             bucket_top,
-            skip_blocks: true,
         }
     }
 
@@ -401,18 +364,17 @@ impl SeedGrid {
             let edge = o + (idx + i64::from(step > 0)) as f64 * self.grid.cell_m;
             ((edge - p) / dd).max(0.0)
         };
-        // From the index, not accumulated: a jump over a block lands where the walk
-        // bucket by bucket would.
-        let t_col = |c: i64| next(c, step_c, self.grid.origin.x, eye.x, d.x);
-        let t_row = |r: i64| next(r, step_r, self.grid.origin.y, eye.y, d.y);
-        let mut t_c = t_col(c);
-        let mut t_r = t_row(r);
-        let (nx, ny) = (self.grid.nx as i64, self.grid.ny as i64);
-        // Whether the ray, from `t0` to `t1`, passes above everything up to `top` (the
-        // slope to a top under the eye is highest at the far end).
-        let under = |top: f64, t0: f64, t1: f64, horizon: f64| {
-            let h = top - z;
-            t0 > 0.0 && horizon >= if h >= 0.0 { h / t0 } else { h / t1 }
+        let mut t_c = next(c, step_c, self.grid.origin.x, eye.x, d.x);
+        let mut t_r = next(r, step_r, self.grid.origin.y, eye.y, d.y);
+        let dt_c = if d.x == 0.0 {
+            f64::INFINITY
+        } else {
+            self.grid.cell_m / d.x.abs()
+        };
+        let dt_r = if d.y == 0.0 {
+            f64::INFINITY
+        } else {
+            self.grid.cell_m / d.y.abs()
         };
         let mut t0 = t_in;
         loop {
@@ -425,58 +387,11 @@ impl SeedGrid {
             let events = &mut s.events;
             events.clear();
             let b = r as usize * self.grid.nx + c as usize;
-            // A bucket whose tallest prism stays under the horizon changes nothing.
-            let skip = under(self.bucket_top[b], t0, t1, horizon);
-            if skip && self.skip_blocks {
-                // The largest aligned block around the bucket that the ray passes above
-                // as well: its last column and row towards the ray and their crossings.
-                let mut exit = None;
-                for (k, level) in self.blocks.iter().enumerate() {
-                    let shift = k + 1;
-                    let (bc, br) = (c >> shift, r >> shift);
-                    let c_last = if step_c > 0 {
-                        (((bc + 1) << shift) - 1).min(nx - 1)
-                    } else {
-                        bc << shift
-                    };
-                    let r_last = if step_r > 0 {
-                        (((br + 1) << shift) - 1).min(ny - 1)
-                    } else {
-                        br << shift
-                    };
-                    let (tc, tr) = (t_col(c_last), t_row(r_last));
-                    let top = level.top[br as usize * level.nx + bc as usize];
-                    if !under(top, t0, tc.min(tr), horizon) {
-                        break;
-                    }
-                    exit = Some((c_last, r_last, tc, tr));
-                }
-                if let Some((c_last, r_last, tc, tr)) = exit {
-                    // The walk leaves the block across its last column when that comes
-                    // first (a tie steps the row first), having crossed every row line
-                    // up to there; the same with rows and columns exchanged.
-                    if tc < tr {
-                        c = c_last + step_c;
-                        while t_row(r) <= tc {
-                            r += step_r;
-                        }
-                        t0 = tc;
-                    } else {
-                        r = r_last + step_r;
-                        while t_col(c) < tr {
-                            c += step_c;
-                        }
-                        t0 = tr;
-                    }
-                    if !t0.is_finite() || c < 0 || r < 0 || c >= nx || r >= ny {
-                        break;
-                    }
-                    t_c = t_col(c);
-                    t_r = t_row(r);
-                    continue;
-                }
-            }
-            let bucket = if skip {
+            // A bucket whose tallest prism stays under the horizon changes nothing (the
+            // slope to a top under the eye is highest at the bucket's far end).
+            let top = self.bucket_top[b] - z;
+            let reach = if top >= 0.0 { top / t0 } else { top / t1 };
+            let bucket = if t0 > 0.0 && horizon >= reach {
                 &[][..]
             } else {
                 self.grid.bucket(c as usize, r as usize)
@@ -537,12 +452,12 @@ impl SeedGrid {
             }
             if t_c < t_r {
                 c += step_c;
-                t_c = t_col(c);
+                t_c += dt_c;
             } else {
                 r += step_r;
-                t_r = t_row(r);
+                t_r += dt_r;
             }
-            if c < 0 || r < 0 || c >= nx || r >= ny {
+            if c < 0 || r < 0 || c >= self.grid.nx as i64 || r >= self.grid.ny as i64 {
                 break;
             }
             t0 = t1;
@@ -628,65 +543,5 @@ mod tests {
         ]);
         let cell = Aabb3::new(DVec3::new(0.0, -2.0, 1.5), DVec3::new(5.0, 2.0, 2.0));
         assert_eq!(marks(&scene, cell), vec![true, false, true]);
-    }
-}
-
-#[cfg(test)]
-mod block_props {
-    use super::*;
-    use crate::dual_ray::occluders::collect_occluders;
-    use proptest::prelude::*;
-    use sightline_geom::{DVec3, Polygon};
-    use sightline_scene::Object;
-
-    /// Blocks on a 5 m raster, many touching, low sheds under the eye and a few towers,
-    /// over enough buckets for several levels of the pyramid.
-    fn city() -> impl Strategy<Value = (Vec<(i32, i32, i32, i32, f64)>, Vec<(i32, i32, i32)>)> {
-        let height = prop_oneof![
-            6 => 2u32..30,
-            2 => 1u32..3,
-            1 => 60u32..300,
-        ];
-        let building = (0i32..80, 0i32..80, 1i32..5, 1i32..5, height)
-            .prop_map(|(x, y, w, d, h)| (x, y, w, d, f64::from(h) * 0.5));
-        let cell = (-20i32..420, -20i32..420, 2i32..40);
-        (
-            prop::collection::vec(building, 10..120),
-            prop::collection::vec(cell, 1..4),
-        )
-    }
-
-    proptest! {
-        #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
-
-        /// Skipping whole blocks of the pyramid marks exactly what the walk bucket by
-        /// bucket marks.
-        #[test]
-        fn block_skipping_changes_no_mark((buildings, cells) in city()) {
-            let scene = Scene::from_objects(
-                buildings
-                    .iter()
-                    .map(|&(x, y, w, d, h)| {
-                        let (x, y) = (f64::from(x) * 5.0, f64::from(y) * 5.0);
-                        let (w, d) = (f64::from(w) * 5.0, f64::from(d) * 5.0);
-                        let r = Polygon::rect(DVec2::new(x, y), DVec2::new(x + w, y + d));
-                        Object::block(None, r, 0.0, h)
-                    })
-                    .collect(),
-            );
-            let occ = collect_occluders(&scene, DVec2::ZERO);
-            let mut g = SeedGrid::new(&scene, DVec2::ZERO, &occ);
-            for (x, y, s) in cells {
-                let (x, y, s) = (f64::from(x) + 0.3, f64::from(y) + 0.6, f64::from(s));
-                let cell = Aabb3::new(DVec3::new(x, y, 1.5), DVec3::new(x + s, y + s, 2.0));
-                let mut marks = [Vec::new(), Vec::new()];
-                for (on, m) in [true, false].into_iter().zip(&mut marks) {
-                    g.skip_blocks = on;
-                    *m = vec![false; scene.objects.len()];
-                    g.mark(&cell, m, &mut SeedScratch::default());
-                }
-                prop_assert_eq!(&marks[0], &marks[1]);
-            }
-        }
     }
 }
