@@ -5,8 +5,9 @@
 //! MODE is `cells` (default: median ms per cell, single thread, and the traversal
 //! counters), `vo` (the same with the cell's strips and virtual occluders on),
 //! `compare` (with and without them: medians, and the PVS with them is contained in the
-//! one without), `nine` (the 9-cell neighbourhood on a 2-thread pool), `check` (the
-//! discretized PVS contains the exact one on every cell) or `table1` (the full table,
+//! one without), `seed` (the seed rays alone: CPU ms per cell), `nine` (the 9-cell
+//! neighbourhood on a 2-thread pool), `check` (the discretized PVS contains the exact
+//! one on every cell) or `table1` (the full table,
 //! resolutions 16..256 × cells 50/100/300 m, CELLS cells per size) or `scaling`
 //! (metropolises of 1k, 10k, 150k and 1M buildings up to BUILDINGS: median ms per cell,
 //! |PVS|, ms per visible object, peak memory, and the fitted exponents of ms and |PVS|
@@ -208,6 +209,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 cells.len(),
                 median(&mut cpu),
                 cpu.iter().sum::<f64>()
+            );
+        }
+        "seed" => {
+            // The seed rays alone (crate::seed): thread CPU ms per cell.
+            let mut cpu = Vec::new();
+            for c in &cells {
+                let c0 = thread_cpu_ns();
+                let seeded = m.seed_objects(c);
+                if let (Some(a), Some(b)) = (c0, thread_cpu_ns()) {
+                    cpu.push((b - a) as f64 * 1e-6);
+                }
+                println!("{c}: {} seeded", seeded.len());
+            }
+            println!(
+                "{size} m cells: seed rays median {:.1} ms/cell CPU over {} cells",
+                median(&mut cpu),
+                cells.len()
             );
         }
         "nine" => {

@@ -32,6 +32,8 @@
 //! Per azimuth the march stops once the running horizon is above what the tallest prism
 //! of the scene could reach further on, so azimuths into a facade cost a few buckets and
 //! only the ones along open streets run far.
+//! Along those, most prisms of a bucket stand beside the ray: a ray missing a prism's
+//! (slightly widened) bounding box is passed without testing its edges.
 
 use crate::occluders::{local_rings, BucketGrid, Occluder, GROUND_EPS_M};
 use sightline_geom::{Aabb3, DVec2};
@@ -98,6 +100,11 @@ pub(crate) struct SeedGrid {
     bucket_top: Vec<f64>,
     /// Tallest prism top.
     max_top: f64,
+    /// Footprint bounds per prism, slightly widened ([`widened`]).
+    boxes: Vec<(DVec2, DVec2)>,
+    /// Whether a prism whose box the ray misses is passed without its edges (off only
+    /// to compare).
+    pub(crate) cull_boxes: bool,
 }
 
 impl SeedGrid {
@@ -196,6 +203,8 @@ impl SeedGrid {
             edges,
             grid,
             bucket_top,
+            boxes: widened(boxes),
+            cull_boxes: true,
         }
     }
 
@@ -355,6 +364,7 @@ impl SeedGrid {
         }
         let start = eye + d * t_in;
         let (mut c, mut r) = (self.grid.col(start.x) as i64, self.grid.row(start.y) as i64);
+        let inv = DVec2::ONE / d;
         let step_c: i64 = if d.x > 0.0 { 1 } else { -1 };
         let step_r: i64 = if d.y > 0.0 { 1 } else { -1 };
         let next = |idx: i64, step: i64, o: f64, p: f64, dd: f64| -> f64 {
@@ -405,7 +415,15 @@ impl SeedGrid {
                 if !occludee && !p.occludes() {
                     continue;
                 }
-                let Some((t, t_last)) = crossings(self.prism_edges(p), eye, d) else {
+                // Most prisms of a bucket stand beside the ray: their box says so at
+                // the cost of one edge.
+                let crossed = if self.cull_boxes && misses_box(self.boxes[i as usize], eye, d, inv)
+                {
+                    None
+                } else {
+                    crossings(self.prism_edges(p), eye, d)
+                };
+                let Some((t, t_last)) = crossed else {
                     s.stamp[i as usize] = gen; // the ray never enters it
                     continue;
                 };
@@ -464,6 +482,42 @@ impl SeedGrid {
         }
         (marked, sig)
     }
+}
+
+/// `boxes` widened by a millionth of the scene's extent, far above the rounding of
+/// [`crossings`]: a ray missing a widened box crosses none of its edges.
+fn widened(mut boxes: Vec<(DVec2, DVec2)>) -> Vec<(DVec2, DVec2)> {
+    let reach = boxes
+        .iter()
+        .map(|(a, b)| a.abs().max(b.abs()).max_element())
+        .fold(1.0, f64::max);
+    let margin = DVec2::splat(1e-6 * reach);
+    for (a, b) in &mut boxes {
+        *a -= margin;
+        *b += margin;
+    }
+    boxes
+}
+
+/// Whether the ray `eye + t·d` (t > 0, `inv = 1 / d`) misses the box `(min, max)`.
+#[inline]
+fn misses_box((min, max): (DVec2, DVec2), eye: DVec2, d: DVec2, inv: DVec2) -> bool {
+    let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+    for (lo, hi, p, dd, iv) in [
+        (min.x, max.x, eye.x, d.x, inv.x),
+        (min.y, max.y, eye.y, d.y, inv.y),
+    ] {
+        if dd == 0.0 {
+            if p < lo || p > hi {
+                return true;
+            }
+        } else {
+            let (a, b) = ((lo - p) * iv, (hi - p) * iv);
+            t0 = t0.max(a.min(b));
+            t1 = t1.min(a.max(b));
+        }
+    }
+    t0 > t1
 }
 
 /// Distances along the ray `eye + t·d` (t > 0) to the first and the last crossing of an
@@ -543,5 +597,88 @@ mod tests {
         ]);
         let cell = Aabb3::new(DVec3::new(0.0, -2.0, 1.5), DVec3::new(5.0, 2.0, 2.0));
         assert_eq!(marks(&scene, cell), vec![true, false, true]);
+    }
+}
+
+#[cfg(test)]
+mod cull_props {
+    use super::*;
+    use crate::dual_ray::occluders::collect_occluders;
+    use proptest::prelude::*;
+    use sightline_geom::{DVec3, Polygon};
+    use sightline_scene::Object;
+
+    /// `(x, y, w, d)` on a 5 m raster and a height.
+    type Building = (i32, i32, i32, i32, f64);
+    /// `(x, y, size)` of a cell, in metres.
+    type Cell = (i32, i32, i32);
+
+    /// Blocks on a 5 m raster, many touching, low sheds under the eye and a few towers,
+    /// some rotated (edges off the axes), and a few cells in and around them.
+    fn city() -> impl Strategy<Value = (Vec<(Building, bool)>, Vec<Cell>)> {
+        let height = prop_oneof![
+            6 => 2u32..30,
+            2 => 1u32..3,
+            1 => 60u32..300,
+        ];
+        let building = (
+            (0i32..60, 0i32..60, 1i32..5, 1i32..5, height),
+            any::<bool>(),
+        )
+            .prop_map(|((x, y, w, d, h), rot)| ((x, y, w, d, f64::from(h) * 0.5), rot));
+        let cell = (-20i32..320, -20i32..320, 2i32..40);
+        (
+            prop::collection::vec(building, 8..80),
+            prop::collection::vec(cell, 1..4),
+        )
+    }
+
+    fn footprint((x, y, w, d, _): Building, rotated: bool) -> Polygon {
+        let (x, y) = (f64::from(x) * 5.0, f64::from(y) * 5.0);
+        let (w, d) = (f64::from(w) * 5.0, f64::from(d) * 5.0);
+        if rotated {
+            // A diamond in the same box.
+            let (cx, cy) = (x + 0.5 * w, y + 0.5 * d);
+            Polygon::new(
+                vec![
+                    DVec2::new(cx, y),
+                    DVec2::new(x + w, cy),
+                    DVec2::new(cx, y + d),
+                    DVec2::new(x, cy),
+                ],
+                vec![],
+            )
+        } else {
+            Polygon::rect(DVec2::new(x, y), DVec2::new(x + w, y + d))
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
+
+        /// Passing the prisms whose box a ray misses marks exactly what testing every
+        /// edge marks.
+        #[test]
+        fn box_culling_changes_no_mark((buildings, cells) in city()) {
+            let scene = Scene::from_objects(
+                buildings
+                    .iter()
+                    .map(|&(b, rot)| Object::block(None, footprint(b, rot), 0.0, b.4))
+                    .collect(),
+            );
+            let occ = collect_occluders(&scene, DVec2::ZERO);
+            let mut g = SeedGrid::new(&scene, DVec2::ZERO, &occ);
+            for (x, y, s) in cells {
+                let (x, y, s) = (f64::from(x) + 0.3, f64::from(y) + 0.6, f64::from(s));
+                let cell = Aabb3::new(DVec3::new(x, y, 1.5), DVec3::new(x + s, y + s, 2.0));
+                let mut marks = [Vec::new(), Vec::new()];
+                for (on, m) in [true, false].into_iter().zip(&mut marks) {
+                    g.cull_boxes = on;
+                    *m = vec![false; scene.objects.len()];
+                    g.mark(&cell, m, &mut SeedScratch::default());
+                }
+                prop_assert_eq!(&marks[0], &marks[1]);
+            }
+        }
     }
 }
