@@ -16,6 +16,9 @@
 //!   where that provably hides nothing visible.
 //! * [`erode`]: erosion of that raster by the structuring elements (§3.1, §4.3) — a
 //!   conservative min-filter — cached for every cell of the same *shape* (§5.1).
+//! * [`tiles`]: that erosion done tile by tile, when the march first reads a tile, so
+//!   the part of the city behind a closed horizon is never eroded (same values, same
+//!   PVS).
 //! * [`shrink`]: occludee pieces, the supporting segment of each (§3.3, §5.1), the
 //!   shrunk occludee (§4.4) and the eye raise that makes §3.3 hold in 3D.
 //! * [`rays`]: the X-sampling of occludees for `erosion-rays` (§7.1).
@@ -48,6 +51,7 @@ pub mod field;
 pub mod occlusion;
 pub mod rays;
 pub mod shrink;
+pub mod tiles;
 
 use crate::dual_ray::occluders::{collect_occluders, local_origin};
 use crate::seed::{SeedGrid, SeedScratch};
@@ -60,6 +64,7 @@ use sightline_geom::{Aabb2, Aabb3, DVec2, ViewCell};
 use sightline_scene::Scene;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
+use tiles::TiledErosion;
 
 /// Cells are refined into quarters at most this many times (see `refine`).
 pub const MAX_DEPTH: usize = 3;
@@ -125,7 +130,7 @@ pub struct ErosionMethod {
     name: &'static str,
     variant: Variant,
     scene: Arc<Scene>,
-    field: HeightField,
+    field: Arc<HeightField>,
     tops: Vec<Vec<Top>>,
     bins: usize,
     /// Eroded occluders per (cell half size in µm, element, fill threshold in dm), with
@@ -136,11 +141,29 @@ pub struct ErosionMethod {
     seed: SeedGrid,
     origin: DVec2,
     use_seed: bool,
+    /// Erode tile by tile as the march reads ([`tiles`], the default) or the whole
+    /// raster at once: the PVS is the same.
+    tiled: bool,
 }
 
 type CacheKey = (i64, i64, Element, u16);
-/// Eroded occluder pyramids with the tick of their last use.
-type ErodedCache = HashMap<CacheKey, (Arc<MinPyramid>, u64)>;
+/// Eroded occluders with the tick of their last use.
+type ErodedCache = HashMap<CacheKey, (Arc<Eroded>, u64)>;
+
+/// The eroded occluders of one element, cell shape and fill threshold.
+enum Eroded {
+    Whole(MinPyramid),
+    Tiled(TiledErosion),
+}
+
+impl Eroded {
+    fn bytes(&self) -> usize {
+        match self {
+            Eroded::Whole(p) => p.bytes(),
+            Eroded::Tiled(t) => t.bytes(),
+        }
+    }
+}
 
 /// X-samplings of one (sub-)cell per (object, top face) (None: keep the object).
 type SampleMemo = HashMap<(usize, usize), Option<Vec<DVec2>>>;
@@ -196,13 +219,14 @@ impl ErosionMethod {
             name,
             variant,
             scene,
-            field,
+            field: Arc::new(field),
             tops,
             bins: bins as usize,
             cache: Mutex::new((0, HashMap::new())),
             seed,
             origin,
             use_seed: true,
+            tiled: true,
         })
     }
 
@@ -213,9 +237,16 @@ impl ErosionMethod {
         self
     }
 
+    /// Erode the occluders tile by tile as the march reads them (`true`, the default)
+    /// or the whole raster at once. The PVS is the same ([`tiles`]).
+    pub fn with_tiles(mut self, on: bool) -> Self {
+        self.tiled = on;
+        self
+    }
+
     /// The erosion of the scene's occluders (courtyards filled above `fill_dm`) by
     /// `element` for cells of half size `half`, shared by every cell of that shape.
-    fn eroded(&self, element: Element, half: DVec2, fill_dm: u16) -> Arc<MinPyramid> {
+    fn eroded(&self, element: Element, half: DVec2, fill_dm: u16) -> Arc<Eroded> {
         let key = (
             (half.x * 1e6).round() as i64,
             (half.y * 1e6).round() as i64,
@@ -232,11 +263,20 @@ impl ErosionMethod {
             }
         }
         // Computed outside the lock: two threads may race to the same field, harmlessly.
-        let g = Arc::new(MinPyramid::new(erode::erode(
-            &self.field.filled(fill_dm),
-            element,
-            half,
-        )));
+        let g = Arc::new(if self.tiled {
+            Eroded::Tiled(TiledErosion::new(
+                self.field.clone(),
+                element,
+                half,
+                fill_dm,
+            ))
+        } else {
+            Eroded::Whole(MinPyramid::new(erode::erode(
+                &self.field.filled(fill_dm),
+                element,
+                half,
+            )))
+        });
         let mut c = self.cache.lock().unwrap_or_else(|e| e.into_inner());
         let tick = c.0;
         c.1.insert(key, (g.clone(), tick));
@@ -528,8 +568,10 @@ impl ErosionMethod {
 
     /// Build the occlusion map of `element` from the cell centre.
     fn render(&self, map: &mut PolarMap, element: Element, ctx: &CellCtx) {
-        let eroded = self.eroded(element, ctx.half, ctx.fill_dm);
-        map.march(&eroded, ctx.s);
+        match &*self.eroded(element, ctx.half, ctx.fill_dm) {
+            Eroded::Whole(p) => map.march(p, ctx.s),
+            Eroded::Tiled(t) => map.march(t, ctx.s),
+        }
     }
 }
 
