@@ -34,7 +34,7 @@
 //! everything. The PVS of a cell is the union of the PVS of its parts, and what is
 //! hidden from a cell is hidden from its parts: `refine` tests the cell, then its
 //! quarters for what it may see, down to [`MAX_DEPTH`] levels (≥ [`MIN_SUBCELL_M`];
-//! [`RAYS_MAX_DEPTH`] for `erosion-rays`).
+//! [`RAYS_MIN_SUBCELL_M`] for `erosion-rays`).
 //!
 //! Vertical erosion (§3.4): the occluders united with the ground form a height field
 //! whose columns extend to −∞, so eroding by the cell's height segment only moves
@@ -66,17 +66,21 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 use tiles::TiledErosion;
 
-/// Cells are refined into quarters at most this many times (see `refine`).
-pub const MAX_DEPTH: usize = 3;
-/// `erosion-rays` goes one level deeper ([`RAYS_MIN_SUBCELL_M`]): its erosion by the
-/// whole (sub-)cell empties rows of terraced houses thinner than a 3 m quarter, which
-/// the segment erosion of `erosion` keeps (Den Haag). The level is adaptive as every
-/// level: only quarters with free space, for the objects their parent may still see.
+/// Cells are refined into quarters at most this many times (see `refine`). On real
+/// street cells the size of the last quarters decides the tightness more than any
+/// other parameter: a diagonal of the cell, the supporting segment of every shaft to a
+/// corner region (§3.3), erodes a row of terraced houses by the quarter's size across
+/// its depth (Den Haag's rows of 8–10 m are gone at 3 m quarters, kept at 1.5 m). The
+/// level is adaptive as every level: only quarters with free space, for the objects
+/// their parent may still see.
+pub const MAX_DEPTH: usize = 4;
+/// The same for `erosion-rays`.
 pub const RAYS_MAX_DEPTH: usize = 4;
 /// The first pass of each test uses this many times fewer azimuth bins.
 const COARSE_FACTOR: usize = 16;
-/// Sub-cells are not made smaller than this (m).
-pub const MIN_SUBCELL_M: f64 = 2.0;
+/// Sub-cells are not made smaller than this (m): a 25 m cell reaches 1.6 m quarters
+/// at its 4th level, a 10 m cell 1.25 m ones at its 3rd.
+pub const MIN_SUBCELL_M: f64 = 1.2;
 /// The same for `erosion-rays` (a 25 m cell reaches 1.6 m quarters at its 4th level).
 pub const RAYS_MIN_SUBCELL_M: f64 = 1.5;
 /// Memory bound of the cache of eroded occluder rasters (bytes).
@@ -179,6 +183,9 @@ struct Pass<'a> {
 struct Test {
     element: Element,
     target: Target,
+    /// Other valid shrunk occludees of the same piece: the piece is hidden if one of
+    /// them, or `target`, is.
+    alts: Vec<Target>,
     eye: f64,
     t: f64,
 }
@@ -322,6 +329,7 @@ impl ErosionMethod {
                         target: Target::new(&ctx.bins, &parts),
                         eye: ctx.z1,
                         t: top.t,
+                        alts: Vec::new(),
                     });
                 }
                 Variant::Cell | Variant::Sphere => {
@@ -335,6 +343,7 @@ impl ErosionMethod {
                         target: ctx.target_ring(&top.ring, DVec2::ZERO),
                         eye: ctx.z1,
                         t: top.t,
+                        alts: Vec::new(),
                     });
                 }
                 Variant::Full | Variant::Segment => {
@@ -347,15 +356,23 @@ impl ErosionMethod {
                         let test = match piece.region {
                             Region::Centre => return None,
                             Region::Side(el) => {
-                                let target = if self.variant == Variant::Full {
-                                    let [a, b] = shrink::shrunk_side(el, &piece, ctx.rect);
+                                let unshrunk =
+                                    || ctx.target_ring(&piece.ring, el.midpoint(ctx.half));
+                                let segment = |[a, b]: [DVec2; 2]| {
                                     Target::new(&ctx.bins, &[(vec![a - ctx.s, b - ctx.s], false)])
+                                };
+                                let (target, alts) = if self.variant == Variant::Full {
+                                    let target = segment(shrink::shrunk_side(el, &piece, ctx.rect));
+                                    let [p, q] = shrink::shrunk_side_ends(el, &piece, ctx.rect);
+                                    let alts = vec![unshrunk(), segment(p), segment(q)];
+                                    (target, alts)
                                 } else {
-                                    ctx.target_ring(&piece.ring, el.midpoint(ctx.half))
+                                    (unshrunk(), Vec::new())
                                 };
                                 Test {
                                     element: el,
                                     target,
+                                    alts,
                                     eye: ctx.z1
                                         + shrink::eye_raise(&piece, ctx.rect, top.t, ctx.z1),
                                     t: top.t,
@@ -369,13 +386,33 @@ impl ErosionMethod {
                                     Test {
                                         element: Element::Cell,
                                         target: ctx.target_ring(&piece.ring, DVec2::ZERO),
+                                        alts: Vec::new(),
                                         eye: ctx.z1,
                                         t: top.t,
                                     }
                                 } else {
+                                    let alts = if self.variant == Variant::Full {
+                                        shrink::shrunk_corner(el, &piece, ctx.rect)
+                                            .iter()
+                                            .filter(|segs| !segs.is_empty())
+                                            .map(|segs| {
+                                                let parts: Vec<(Vec<DVec2>, bool)> = segs
+                                                    .iter()
+                                                    .map(|[a, b]| {
+                                                        (vec![*a - ctx.s, *b - ctx.s], false)
+                                                    })
+                                                    .collect();
+                                                Target::new(&ctx.bins, &parts)
+                                            })
+                                            .collect()
+                                    } else {
+                                        Vec::new()
+                                    };
+                                    let target = ctx.target_ring(&piece.ring, DVec2::ZERO);
                                     Test {
                                         element: el,
-                                        target: ctx.target_ring(&piece.ring, DVec2::ZERO),
+                                        target,
+                                        alts,
                                         eye: ctx.z1
                                             + shrink::eye_raise(&piece, ctx.rect, top.t, ctx.z1),
                                         t: top.t,
@@ -542,6 +579,11 @@ impl ErosionMethod {
                         None => PolarMap::new(ctx.bins.clone()),
                     })
                     .need(&t.target, t.eye, t.t);
+                if let Some(m) = maps.get_mut(&t.element) {
+                    for a in &t.alts {
+                        m.need(a, t.eye, t.t);
+                    }
+                }
             }
         }
         let mut elements: Vec<Element> = maps.keys().copied().collect();
@@ -554,8 +596,10 @@ impl ErosionMethod {
         undecided.clear();
         for (id, tests) in pending {
             let hidden = tests.iter().all(|t| {
-                maps.get(&t.element)
-                    .is_some_and(|m| m.hidden(&t.target, t.eye, t.t))
+                maps.get(&t.element).is_some_and(|m| {
+                    m.hidden(&t.target, t.eye, t.t)
+                        || t.alts.iter().any(|a| m.hidden(a, t.eye, t.t))
+                })
             });
             if hidden {
                 undecided.push(id);
