@@ -356,23 +356,16 @@ impl ErosionMethod {
                         let test = match piece.region {
                             Region::Centre => return None,
                             Region::Side(el) => {
-                                let unshrunk =
-                                    || ctx.target_ring(&piece.ring, el.midpoint(ctx.half));
-                                let segment = |[a, b]: [DVec2; 2]| {
+                                let target = if self.variant == Variant::Full {
+                                    let [a, b] = shrink::shrunk_side(el, &piece, ctx.rect);
                                     Target::new(&ctx.bins, &[(vec![a - ctx.s, b - ctx.s], false)])
-                                };
-                                let (target, alts) = if self.variant == Variant::Full {
-                                    let target = segment(shrink::shrunk_side(el, &piece, ctx.rect));
-                                    let [p, q] = shrink::shrunk_side_ends(el, &piece, ctx.rect);
-                                    let alts = vec![unshrunk(), segment(p), segment(q)];
-                                    (target, alts)
                                 } else {
-                                    (unshrunk(), Vec::new())
+                                    ctx.target_ring(&piece.ring, el.midpoint(ctx.half))
                                 };
                                 Test {
                                     element: el,
                                     target,
-                                    alts,
+                                    alts: Vec::new(),
                                     eye: ctx.z1
                                         + shrink::eye_raise(&piece, ctx.rect, top.t, ctx.z1),
                                     t: top.t,

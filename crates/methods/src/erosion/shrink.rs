@@ -24,13 +24,14 @@
 //! * the *centre* piece (overlapping the cell's footprint): visible.
 //!
 //! **Any valid shrinking will do.** Theorem 1 holds for every `R` with `O ⊂ R ⊕ X`,
-//! and these are many: the collapsed segment may sit anywhere across the side where
-//! it still covers the piece, the piece itself (translated by the element's midpoint)
-//! is one, and along a diagonal both extreme placements are. They hide different
-//! things — a shrunk occludee moved sideways may look down an open street the piece
-//! itself is hidden from — so a piece is hidden as soon as *one* of them is
-//! ([`shrunk_side_ends`], [`shrunk_corner`]; the `erosion` method tests them all on the
-//! same occlusion map: a tighter PVS with the same guarantee).
+//! and a corner piece has several: the piece itself (`0 ∈ X`) and, along the
+//! diagonal, the segments of both extreme placements ([`shrunk_corner`]). They hide
+//! different things — a shrunk occludee moved sideways may look down an open street
+//! the piece itself is hidden from, and the other way round — so a piece is hidden as
+//! soon as *one* of them is (the `erosion` method tests the three on the same
+//! occlusion map: a tighter PVS with the same guarantee). The same holds across a side
+//! (the collapsed segment may sit anywhere its length still covers the piece), but
+//! there the extra tests cost far more than they hide.
 
 use super::erode::Element;
 use sightline_geom::polygon::ring_signed_area;
@@ -229,31 +230,6 @@ pub fn shrunk_corner(corner: Element, piece: &Piece, cell: Aabb2) -> [Vec<[DVec2
     [at(0), at(1)]
 }
 
-/// The other valid placements of [`shrunk_side`]'s segment: across the side, any
-/// offset keeping the piece's extent within the side's length covers it; these are
-/// the two extreme ones.
-pub fn shrunk_side_ends(side: Element, piece: &Piece, cell: Aabb2) -> [[DVec2; 2]; 2] {
-    let half = cell.size() * 0.5;
-    let bb = piece.bbox;
-    let [a, b] = shrunk_side(side, piece, cell);
-    match side {
-        Element::Right | Element::Left => {
-            let (y0, y1) = (bb.max.y - half.y, bb.min.y + half.y);
-            [
-                [DVec2::new(a.x, y0), DVec2::new(b.x, y0)],
-                [DVec2::new(a.x, y1), DVec2::new(b.x, y1)],
-            ]
-        }
-        _ => {
-            let (x0, x1) = (bb.max.x - half.x, bb.min.x + half.x);
-            [
-                [DVec2::new(x0, a.y), DVec2::new(x0, b.y)],
-                [DVec2::new(x1, a.y), DVec2::new(x1, b.y)],
-            ]
-        }
-    }
-}
-
 /// How much the eye must be raised above the cell top `z1` for an occludee piece of
 /// top height `t` tested with a segment element.
 ///
@@ -359,9 +335,9 @@ mod tests {
     }
 
     /// Every point of a piece lies in `R ⊕ X` for each shrunk occludee `R` of a corner
-    /// piece (both choices, short and long pieces) and of a side piece (its ends).
+    /// piece (both choices, short and long pieces).
     #[test]
-    fn shrunk_corners_and_side_ends_cover_the_piece() {
+    fn shrunk_corners_cover_the_piece() {
         let cell = Aabb2::new(DVec2::new(0.0, 0.0), DVec2::new(10.0, 6.0));
         let (a, b) = (5.0, 3.0);
         // X as a set of vectors from the cell centre: the segment p → q.
@@ -416,22 +392,6 @@ mod tests {
                 for o in ring {
                     assert!(covered(&segs, p, q, *o), "{el:?} {o:?} {segs:?}");
                 }
-            }
-        }
-        let ring = vec![
-            DVec2::new(12.0, 1.0),
-            DVec2::new(20.0, 2.0),
-            DVec2::new(18.0, 4.0),
-        ];
-        let ps = pieces(&ring, cell);
-        let el = Element::Right;
-        let [p, q] = [
-            el.vertices(DVec2::new(a, b))[0],
-            el.vertices(DVec2::new(a, b))[1],
-        ];
-        for seg in shrunk_side_ends(el, &ps[0], cell) {
-            for o in &ring {
-                assert!(covered(&[seg], p, q, *o), "{o:?} {seg:?}");
             }
         }
     }
