@@ -115,15 +115,97 @@ pub(crate) fn snap(x: f64) -> f64 {
     }
 }
 
-/// `G ⊖ X` as an inner raster (module doc), on a raster grown by the element's reach.
-pub fn erode(g: &Grid, element: Element, half: DVec2) -> Grid {
-    let d = g.pixel_m;
+/// One step of an erosion: a min-filter with zero outside the raster.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Step {
+    /// `E(i, j) = min G(i + kx, j + ky)` for `kx` in `x`, `ky` in `y` (inclusive).
+    Window { x: (i64, i64), y: (i64, i64) },
+    /// `E(i, j) = min over the offsets c of G(i + c.x, j + c.y)`.
+    Shifts(Vec<(i64, i64)>),
+}
+
+impl Step {
+    /// The greatest |offset| of the step along either axis (pixels).
+    pub fn reach_px(&self) -> i64 {
+        match self {
+            Step::Window { x, y } => [x.0, x.1, y.0, y.1]
+                .iter()
+                .map(|k| k.abs())
+                .max()
+                .unwrap_or(0),
+            Step::Shifts(c) => c
+                .iter()
+                .map(|&(x, y)| x.abs().max(y.abs()))
+                .max()
+                .unwrap_or(0),
+        }
+    }
+
+    /// Two offsets `k` of the step, each with `E(p) ≤ G(p + k)`: the window's lower
+    /// and upper corners, the first and last shift.
+    pub fn end_offsets(&self) -> [(i64, i64); 2] {
+        match self {
+            Step::Window { x, y } => [(x.0, y.0), (x.1, y.1)],
+            Step::Shifts(c) => [
+                c.first().copied().unwrap_or((0, 0)),
+                c.last().copied().unwrap_or((0, 0)),
+            ],
+        }
+    }
+
+    /// Apply the step to `g` (reads outside `g` give 0).
+    pub fn apply(&self, g: &Grid) -> Grid {
+        match self {
+            Step::Window { x, y } => window(g, *x, *y),
+            Step::Shifts(centres) => shifts_min(g, centres),
+        }
+    }
+}
+
+/// The min-filters whose chain is the erosion by `element` of half sizes `half` on a
+/// raster of pixel `d` (module doc): the same chain for the whole raster ([`erode`])
+/// and for its tiles ([`super::tiles`]).
+pub fn steps(element: Element, half: DVec2, d: f64) -> Vec<Step> {
+    let (a, b) = (half.x, half.y);
+    let v = DVec2::new;
+    let win = |x: (i64, i64), y: (i64, i64)| Step::Window { x, y };
+    match element {
+        Element::Right => vec![win(offsets(a, a, d), offsets(-b, b, d))],
+        Element::Left => vec![win(offsets(-a, -a, d), offsets(-b, b, d))],
+        Element::Top => vec![win(offsets(-a, a, d), offsets(b, b, d))],
+        Element::Bottom => vec![win(offsets(-a, a, d), offsets(-b, -b, d))],
+        Element::Cell => vec![win(offsets(-a, a, d), offsets(-b, b, d))],
+        Element::Diagonal => segment_steps(v(-a, -b), v(a, b), d),
+        Element::AntiDiagonal => segment_steps(v(-a, b), v(a, -b), d),
+        Element::Octagon => {
+            let rv = half.length() / (std::f64::consts::PI / 8.0).cos();
+            let l = 2.0 * rv * (std::f64::consts::PI / 8.0).sin();
+            let h = l / 2.0;
+            let q = h * std::f64::consts::FRAC_1_SQRT_2;
+            let mut s = vec![win(offsets(-h, h, d), offsets(-h, h, d))];
+            s.extend(segment_steps(v(-q, -q), v(q, q), d));
+            s.extend(segment_steps(v(-q, q), v(q, -q), d));
+            s
+        }
+    }
+}
+
+/// The pixels of zeros added around the raster by [`erode`] for `element` (its reach
+/// and a few pixels of slack): the eroded raster's pixel `(i, j)` is `G`'s pixel
+/// `(i − pad, j − pad)`.
+pub fn pad_px(element: Element, half: DVec2, d: f64) -> i64 {
     let reach = element
         .vertices(half)
         .iter()
         .map(|v| v.abs().max_element())
         .fold(0.0, f64::max);
-    let pad = (reach / d).ceil() as i64 + 3;
+    (reach / d).ceil() as i64 + 3
+}
+
+/// `G ⊖ X` as an inner raster (module doc), on a raster grown by the element's reach.
+pub fn erode(g: &Grid, element: Element, half: DVec2) -> Grid {
+    let d = g.pixel_m;
+    let pad = pad_px(element, half, d);
     let mut p = Grid::zeros(
         g.origin - DVec2::splat(pad as f64 * d),
         d,
@@ -135,26 +217,10 @@ pub fn erode(g: &Grid, element: Element, half: DVec2) -> Grid {
         let at = ((j + pad) * p.nx + pad) as usize;
         p.data[at..at + g.nx as usize].copy_from_slice(src);
     }
-    let (a, b) = (half.x, half.y);
-    let v = DVec2::new;
-    match element {
-        Element::Right => window(&p, offsets(a, a, d), offsets(-b, b, d)),
-        Element::Left => window(&p, offsets(-a, -a, d), offsets(-b, b, d)),
-        Element::Top => window(&p, offsets(-a, a, d), offsets(b, b, d)),
-        Element::Bottom => window(&p, offsets(-a, a, d), offsets(-b, -b, d)),
-        Element::Cell => window(&p, offsets(-a, a, d), offsets(-b, b, d)),
-        Element::Diagonal => segment(&p, v(-a, -b), v(a, b)),
-        Element::AntiDiagonal => segment(&p, v(-a, b), v(a, -b)),
-        Element::Octagon => {
-            let rv = half.length() / (std::f64::consts::PI / 8.0).cos();
-            let l = 2.0 * rv * (std::f64::consts::PI / 8.0).sin();
-            let h = l / 2.0;
-            let q = h * std::f64::consts::FRAC_1_SQRT_2;
-            let e = window(&p, offsets(-h, h, d), offsets(-h, h, d));
-            let e = segment(&e, v(-q, -q), v(q, q));
-            segment(&e, v(-q, q), v(q, -q))
-        }
+    for step in steps(element, half, d) {
+        p = step.apply(&p);
     }
+    p
 }
 
 /// `E(i, j) = min G(i + kx, j + ky)` over the offset rectangle.
@@ -213,9 +279,7 @@ fn window_min(v: &mut [u16], k0: i64, k1: i64, m: &mut Vec<u16>, unit: usize) {
 }
 
 /// Erosion by the segment `u → v` (module doc: samples with 3 × 3 minima).
-fn segment(g: &Grid, u: DVec2, v: DVec2) -> Grid {
-    let d = g.pixel_m;
-    let g3 = window(g, (-1, 1), (-1, 1));
+fn segment_steps(u: DVec2, v: DVec2, d: f64) -> Vec<Step> {
     let span = (v - u).abs().max_element();
     let steps = (span / d).ceil().max(1.0) as i64;
     let mut centres: Vec<(i64, i64)> = Vec::new();
@@ -232,12 +296,74 @@ fn segment(g: &Grid, u: DVec2, v: DVec2) -> Grid {
     }
     centres.sort_unstable();
     centres.dedup();
+    vec![
+        Step::Window {
+            x: (-1, 1),
+            y: (-1, 1),
+        },
+        Step::Shifts(centres),
+    ]
+}
+
+/// `E(p) = min over the offsets c of G(p + c)` (0 outside `G`).
+///
+/// The offsets of a digital segment lie on a few lines along one direction `t`: a run
+/// `c₀, c₀ + t, …, c₀ + (L − 1)t` is the union of two runs of `2^k ≤ L` offsets
+/// (starting at `c₀` and at `c₀ + (L − 2^k)t`), and `M_{2^k}(p) = min over i < 2^k of
+/// G(p + i t)` comes by doubling, `M_{2q}(p) = min(M_q(p), M_q(p + q t))` — the same
+/// minimum as one shift per offset, in `log L + 2` passes per run length instead of
+/// `L` (zero outside the raster in both).
+fn shifts_min(g: &Grid, centres: &[(i64, i64)]) -> Grid {
     let mut out = Grid {
         data: vec![u16::MAX; g.data.len()],
         ..g.clone()
     };
-    for (cx, cy) in centres {
-        shift_min(&mut out, &g3, cx, cy);
+    let set: std::collections::HashSet<(i64, i64)> = centres.iter().copied().collect();
+    // Runs along `t`: (start, length), by length.
+    let runs_along = |t: (i64, i64)| -> Vec<((i64, i64), i64)> {
+        let mut runs = Vec::new();
+        for &c in centres {
+            if set.contains(&(c.0 - t.0, c.1 - t.1)) {
+                continue;
+            }
+            let mut len = 1;
+            while set.contains(&(c.0 + len * t.0, c.1 + len * t.1)) {
+                len += 1;
+            }
+            runs.push((c, len));
+        }
+        runs.sort_by_key(|r| r.1);
+        runs
+    };
+    let passes = |runs: &[((i64, i64), i64)]| -> usize {
+        let longest = runs.last().map_or(1, |r| r.1);
+        2 * runs.len() + (63 - longest.leading_zeros() as usize)
+    };
+    let best = [(1, 1), (1, -1), (1, 0), (0, 1)]
+        .into_iter()
+        .map(|t| (t, runs_along(t)))
+        .min_by_key(|(_, runs)| passes(runs));
+    match best {
+        Some((t, runs)) if passes(&runs) < centres.len() => {
+            let mut m = g.clone();
+            let mut q = 1i64;
+            for (c, len) in runs {
+                while 2 * q <= len {
+                    let mut next = m.clone();
+                    shift_min(&mut next, &m, q * t.0, q * t.1);
+                    m = next;
+                    q *= 2;
+                }
+                let k = len - q;
+                shift_min(&mut out, &m, c.0, c.1);
+                shift_min(&mut out, &m, c.0 + k * t.0, c.1 + k * t.1);
+            }
+        }
+        _ => {
+            for &(cx, cy) in centres {
+                shift_min(&mut out, g, cx, cy);
+            }
+        }
     }
     out
 }
@@ -342,6 +468,33 @@ mod tests {
                 }
             }
             assert!(kept > 0, "{el:?} erased everything");
+        }
+    }
+
+    /// The run-doubling minimum equals one shift per offset, for the digital
+    /// segments of both diagonals at many half sizes (on and off the pixel grid).
+    #[test]
+    fn shifts_by_runs_equal_one_shift_per_offset() {
+        let g = grid_with(&[
+            (3, 2, 30, 12, 100),
+            (10, 12, 22, 38, 60),
+            (22, 20, 37, 30, 80),
+        ]);
+        for k in 1..40 {
+            let half = DVec2::new(0.3 * k as f64, 0.25 * k as f64 + 0.1 * (k % 3) as f64);
+            for el in [Element::Diagonal, Element::AntiDiagonal, Element::Octagon] {
+                for step in steps(el, half, 0.5) {
+                    let Step::Shifts(c) = &step else { continue };
+                    let mut naive = Grid {
+                        data: vec![u16::MAX; g.data.len()],
+                        ..g.clone()
+                    };
+                    for &(cx, cy) in c {
+                        shift_min(&mut naive, &g, cx, cy);
+                    }
+                    assert_eq!(shifts_min(&g, c).data, naive.data, "{el:?} {half:?}");
+                }
+            }
         }
     }
 

@@ -23,6 +23,7 @@
 
 use sightline_geom::{boolean, Aabb2, DVec2, Polygon};
 use sightline_scene::Scene;
+use std::sync::OnceLock;
 
 /// Pixel size of the height field for ordinary scenes (m).
 pub const PIXEL_M: f64 = 0.5;
@@ -137,7 +138,7 @@ pub struct MinPyramid {
 }
 
 /// The next level of a pyramid: `f` of each 2 × 2 block (reads outside give 0).
-fn reduce(last: &Grid, f: impl Fn(u16, u16) -> u16) -> Grid {
+pub(crate) fn reduce(last: &Grid, f: impl Fn(u16, u16) -> u16) -> Grid {
     let (nx, ny) = ((last.nx + 1) / 2, (last.ny + 1) / 2);
     let mut g = Grid::zeros(last.origin, last.pixel_m * 2.0, nx, ny);
     for j in 0..ny {
@@ -177,22 +178,10 @@ impl MinPyramid {
             .sum()
     }
 
-    /// The least L with `span / 2^L ≤ 2` (capped at the coarsest level `top`).
-    fn level_for(&self, r: Aabb2, top: usize) -> usize {
-        let span = r.size().max_element() / self.levels[0].pixel_m;
-        let mut level = 0;
-        let mut reach = 2.0;
-        while span > reach && level < top {
-            level += 1;
-            reach *= 2.0;
-        }
-        level
-    }
-
     /// A lower bound of the values of every base pixel meeting `r`, from the finest
     /// level where `r` spans at most about two texels per axis.
     pub fn min_over(&self, r: Aabb2) -> u16 {
-        let level = self.level_for(r, self.levels.len() - 1);
+        let level = level_for(r, self.levels[0].pixel_m, self.levels.len() - 1);
         self.levels[level].min_over(r)
     }
 
@@ -201,7 +190,7 @@ impl MinPyramid {
     /// by `min_over(s)` holds the least value of its block, which contains a base
     /// pixel meeting `s`. Pixels outside the raster are 0.
     pub fn max_over(&self, r: Aabb2) -> u16 {
-        let level = self.level_for(r, self.max_levels.len());
+        let level = level_for(r, self.levels[0].pixel_m, self.max_levels.len());
         let g = if level == 0 {
             &self.levels[0]
         } else {
@@ -225,6 +214,45 @@ impl MinPyramid {
     }
 }
 
+/// The pyramid level a query over `r` reads: the least `L` with `span / 2^L ≤ 2`
+/// pixels of `pixel_m` (capped at the coarsest level `top`).
+pub(crate) fn level_for(r: Aabb2, pixel_m: f64, top: usize) -> usize {
+    let span = r.size().max_element() / pixel_m;
+    let mut level = 0;
+    let mut reach = 2.0;
+    while span > reach && level < top {
+        level += 1;
+        reach *= 2.0;
+    }
+    level
+}
+
+/// The geometry (no data) of the levels of the pyramid [`MinPyramid::new`] builds on a
+/// raster of `nx × ny` pixels at `origin`.
+pub(crate) fn pyramid_geometry(origin: DVec2, pixel_m: f64, nx: i64, ny: i64) -> Vec<Grid> {
+    let mut levels = vec![Grid {
+        origin,
+        pixel_m,
+        nx,
+        ny,
+        data: Vec::new(),
+    }];
+    while let Some(last) = levels.last() {
+        if last.nx <= 1 && last.ny <= 1 || levels.len() >= 12 {
+            break;
+        }
+        let next = Grid {
+            origin,
+            pixel_m: last.pixel_m * 2.0,
+            nx: (last.nx + 1) / 2,
+            ny: (last.ny + 1) / 2,
+            data: Vec::new(),
+        };
+        levels.push(next);
+    }
+    levels
+}
+
 /// `⌊x⌋` without a libm call (hot in the occlusion-map march); saturating.
 #[inline]
 fn floor(x: f64) -> i64 {
@@ -245,6 +273,8 @@ pub struct HeightField {
     pub escape: Grid,
     /// Pixels touched by some occluder footprint (1) or not (0).
     touched: Vec<bool>,
+    /// Max-pyramid of `escape` above its base (built on first use).
+    escape_max: OnceLock<Vec<Grid>>,
 }
 
 /// Per-row boundary intervals and centre-line crossings of a set of rings.
@@ -409,6 +439,7 @@ impl HeightField {
                 escape: g.clone(),
                 g,
                 touched: vec![false],
+                escape_max: OnceLock::new(),
             };
         }
         let size = bounds.size();
@@ -494,7 +525,53 @@ impl HeightField {
         }
         let touched = low.iter().map(|&v| v != u16::MAX).collect();
         let escape = priority_flood(&g);
-        HeightField { g, escape, touched }
+        HeightField {
+            g,
+            escape,
+            touched,
+            escape_max: OnceLock::new(),
+        }
+    }
+
+    /// An upper bound of the escape height `F` — hence of every filled field
+    /// ([`Self::filled`]) — over the pixels `[i0, i1] × [j0, j1]` of `g` (0 outside).
+    pub fn escape_max_over(&self, (i0, i1): (i64, i64), (j0, j1): (i64, i64)) -> u16 {
+        let (i0, i1) = (i0.max(0), i1.min(self.g.nx - 1));
+        let (j0, j1) = (j0.max(0), j1.min(self.g.ny - 1));
+        if i0 > i1 || j0 > j1 {
+            return 0;
+        }
+        let levels = self.escape_max.get_or_init(|| {
+            let mut out: Vec<Grid> = Vec::new();
+            loop {
+                let last = out.last().unwrap_or(&self.escape);
+                if last.nx <= 1 && last.ny <= 1 {
+                    break;
+                }
+                let next = reduce(last, u16::max);
+                out.push(next);
+            }
+            out
+        });
+        // The finest level where the range spans at most two texels per axis.
+        let mut level = 0usize;
+        while level < levels.len()
+            && ((i1 >> level) - (i0 >> level) > 1 || (j1 >> level) - (j0 >> level) > 1)
+        {
+            level += 1;
+        }
+        let g = if level == 0 {
+            &self.escape
+        } else {
+            &levels[level - 1]
+        };
+        let mut m = 0;
+        for j in (j0 >> level)..=(j1 >> level).min(g.ny - 1) {
+            for i in (i0 >> level)..=(i1 >> level).min(g.nx - 1) {
+                m = m.max(g.data[(j * g.nx + i) as usize]);
+            }
+        }
+        m
     }
 
     /// Whether some occluder footprint may meet the rectangle (conservative: true when

@@ -16,6 +16,9 @@
 //!   where that provably hides nothing visible.
 //! * [`erode`]: erosion of that raster by the structuring elements (§3.1, §4.3) — a
 //!   conservative min-filter — cached for every cell of the same *shape* (§5.1).
+//! * [`tiles`]: that erosion done tile by tile, when the march first reads a tile, so
+//!   the part of the city behind a closed horizon is never eroded (same values, same
+//!   PVS).
 //! * [`shrink`]: occludee pieces, the supporting segment of each (§3.3, §5.1), the
 //!   shrunk occludee (§4.4) and the eye raise that makes §3.3 hold in 3D.
 //! * [`rays`]: the X-sampling of occludees for `erosion-rays` (§7.1).
@@ -31,7 +34,7 @@
 //! everything. The PVS of a cell is the union of the PVS of its parts, and what is
 //! hidden from a cell is hidden from its parts: `refine` tests the cell, then its
 //! quarters for what it may see, down to [`MAX_DEPTH`] levels (≥ [`MIN_SUBCELL_M`];
-//! [`RAYS_MAX_DEPTH`] for `erosion-rays`).
+//! [`RAYS_MIN_SUBCELL_M`] for `erosion-rays`).
 //!
 //! Vertical erosion (§3.4): the occluders united with the ground form a height field
 //! whose columns extend to −∞, so eroding by the cell's height segment only moves
@@ -48,6 +51,7 @@ pub mod field;
 pub mod occlusion;
 pub mod rays;
 pub mod shrink;
+pub mod tiles;
 
 use crate::dual_ray::occluders::{collect_occluders, local_origin};
 use crate::seed::{SeedGrid, SeedScratch};
@@ -60,18 +64,23 @@ use sightline_geom::{Aabb2, Aabb3, DVec2, ViewCell};
 use sightline_scene::Scene;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
+use tiles::TiledErosion;
 
-/// Cells are refined into quarters at most this many times (see `refine`).
-pub const MAX_DEPTH: usize = 3;
-/// `erosion-rays` goes one level deeper ([`RAYS_MIN_SUBCELL_M`]): its erosion by the
-/// whole (sub-)cell empties rows of terraced houses thinner than a 3 m quarter, which
-/// the segment erosion of `erosion` keeps (Den Haag). The level is adaptive as every
-/// level: only quarters with free space, for the objects their parent may still see.
+/// Cells are refined into quarters at most this many times (see `refine`). On real
+/// street cells the size of the last quarters decides the tightness more than any
+/// other parameter: a diagonal of the cell, the supporting segment of every shaft to a
+/// corner region (§3.3), erodes a row of terraced houses by the quarter's size across
+/// its depth (Den Haag's rows of 8–10 m are gone at 3 m quarters, kept at 1.5 m). The
+/// level is adaptive as every level: only quarters with free space, for the objects
+/// their parent may still see.
+pub const MAX_DEPTH: usize = 4;
+/// The same for `erosion-rays`.
 pub const RAYS_MAX_DEPTH: usize = 4;
 /// The first pass of each test uses this many times fewer azimuth bins.
 const COARSE_FACTOR: usize = 16;
-/// Sub-cells are not made smaller than this (m).
-pub const MIN_SUBCELL_M: f64 = 2.0;
+/// Sub-cells are not made smaller than this (m): a 25 m cell reaches 1.6 m quarters
+/// at its 4th level, a 10 m cell 1.25 m ones at its 3rd.
+pub const MIN_SUBCELL_M: f64 = 1.2;
 /// The same for `erosion-rays` (a 25 m cell reaches 1.6 m quarters at its 4th level).
 pub const RAYS_MIN_SUBCELL_M: f64 = 1.5;
 /// Memory bound of the cache of eroded occluder rasters (bytes).
@@ -125,7 +134,7 @@ pub struct ErosionMethod {
     name: &'static str,
     variant: Variant,
     scene: Arc<Scene>,
-    field: HeightField,
+    field: Arc<HeightField>,
     tops: Vec<Vec<Top>>,
     bins: usize,
     /// Eroded occluders per (cell half size in µm, element, fill threshold in dm), with
@@ -136,11 +145,29 @@ pub struct ErosionMethod {
     seed: SeedGrid,
     origin: DVec2,
     use_seed: bool,
+    /// Erode tile by tile as the march reads ([`tiles`], the default) or the whole
+    /// raster at once: the PVS is the same.
+    tiled: bool,
 }
 
 type CacheKey = (i64, i64, Element, u16);
-/// Eroded occluder pyramids with the tick of their last use.
-type ErodedCache = HashMap<CacheKey, (Arc<MinPyramid>, u64)>;
+/// Eroded occluders with the tick of their last use.
+type ErodedCache = HashMap<CacheKey, (Arc<Eroded>, u64)>;
+
+/// The eroded occluders of one element, cell shape and fill threshold.
+enum Eroded {
+    Whole(MinPyramid),
+    Tiled(TiledErosion),
+}
+
+impl Eroded {
+    fn bytes(&self) -> usize {
+        match self {
+            Eroded::Whole(p) => p.bytes(),
+            Eroded::Tiled(t) => t.bytes(),
+        }
+    }
+}
 
 /// X-samplings of one (sub-)cell per (object, top face) (None: keep the object).
 type SampleMemo = HashMap<(usize, usize), Option<Vec<DVec2>>>;
@@ -156,6 +183,9 @@ struct Pass<'a> {
 struct Test {
     element: Element,
     target: Target,
+    /// Other valid shrunk occludees of the same piece: the piece is hidden if one of
+    /// them, or `target`, is.
+    alts: Vec<Target>,
     eye: f64,
     t: f64,
 }
@@ -196,13 +226,14 @@ impl ErosionMethod {
             name,
             variant,
             scene,
-            field,
+            field: Arc::new(field),
             tops,
             bins: bins as usize,
             cache: Mutex::new((0, HashMap::new())),
             seed,
             origin,
             use_seed: true,
+            tiled: true,
         })
     }
 
@@ -213,9 +244,16 @@ impl ErosionMethod {
         self
     }
 
+    /// Erode the occluders tile by tile as the march reads them (`true`, the default)
+    /// or the whole raster at once. The PVS is the same ([`tiles`]).
+    pub fn with_tiles(mut self, on: bool) -> Self {
+        self.tiled = on;
+        self
+    }
+
     /// The erosion of the scene's occluders (courtyards filled above `fill_dm`) by
     /// `element` for cells of half size `half`, shared by every cell of that shape.
-    fn eroded(&self, element: Element, half: DVec2, fill_dm: u16) -> Arc<MinPyramid> {
+    fn eroded(&self, element: Element, half: DVec2, fill_dm: u16) -> Arc<Eroded> {
         let key = (
             (half.x * 1e6).round() as i64,
             (half.y * 1e6).round() as i64,
@@ -232,11 +270,20 @@ impl ErosionMethod {
             }
         }
         // Computed outside the lock: two threads may race to the same field, harmlessly.
-        let g = Arc::new(MinPyramid::new(erode::erode(
-            &self.field.filled(fill_dm),
-            element,
-            half,
-        )));
+        let g = Arc::new(if self.tiled {
+            Eroded::Tiled(TiledErosion::new(
+                self.field.clone(),
+                element,
+                half,
+                fill_dm,
+            ))
+        } else {
+            Eroded::Whole(MinPyramid::new(erode::erode(
+                &self.field.filled(fill_dm),
+                element,
+                half,
+            )))
+        });
         let mut c = self.cache.lock().unwrap_or_else(|e| e.into_inner());
         let tick = c.0;
         c.1.insert(key, (g.clone(), tick));
@@ -282,6 +329,7 @@ impl ErosionMethod {
                         target: Target::new(&ctx.bins, &parts),
                         eye: ctx.z1,
                         t: top.t,
+                        alts: Vec::new(),
                     });
                 }
                 Variant::Cell | Variant::Sphere => {
@@ -295,6 +343,7 @@ impl ErosionMethod {
                         target: ctx.target_ring(&top.ring, DVec2::ZERO),
                         eye: ctx.z1,
                         t: top.t,
+                        alts: Vec::new(),
                     });
                 }
                 Variant::Full | Variant::Segment => {
@@ -316,6 +365,7 @@ impl ErosionMethod {
                                 Test {
                                     element: el,
                                     target,
+                                    alts: Vec::new(),
                                     eye: ctx.z1
                                         + shrink::eye_raise(&piece, ctx.rect, top.t, ctx.z1),
                                     t: top.t,
@@ -329,13 +379,33 @@ impl ErosionMethod {
                                     Test {
                                         element: Element::Cell,
                                         target: ctx.target_ring(&piece.ring, DVec2::ZERO),
+                                        alts: Vec::new(),
                                         eye: ctx.z1,
                                         t: top.t,
                                     }
                                 } else {
+                                    let alts = if self.variant == Variant::Full {
+                                        shrink::shrunk_corner(el, &piece, ctx.rect)
+                                            .iter()
+                                            .filter(|segs| !segs.is_empty())
+                                            .map(|segs| {
+                                                let parts: Vec<(Vec<DVec2>, bool)> = segs
+                                                    .iter()
+                                                    .map(|[a, b]| {
+                                                        (vec![*a - ctx.s, *b - ctx.s], false)
+                                                    })
+                                                    .collect();
+                                                Target::new(&ctx.bins, &parts)
+                                            })
+                                            .collect()
+                                    } else {
+                                        Vec::new()
+                                    };
+                                    let target = ctx.target_ring(&piece.ring, DVec2::ZERO);
                                     Test {
                                         element: el,
-                                        target: ctx.target_ring(&piece.ring, DVec2::ZERO),
+                                        target,
+                                        alts,
                                         eye: ctx.z1
                                             + shrink::eye_raise(&piece, ctx.rect, top.t, ctx.z1),
                                         t: top.t,
@@ -502,6 +572,11 @@ impl ErosionMethod {
                         None => PolarMap::new(ctx.bins.clone()),
                     })
                     .need(&t.target, t.eye, t.t);
+                if let Some(m) = maps.get_mut(&t.element) {
+                    for a in &t.alts {
+                        m.need(a, t.eye, t.t);
+                    }
+                }
             }
         }
         let mut elements: Vec<Element> = maps.keys().copied().collect();
@@ -514,8 +589,10 @@ impl ErosionMethod {
         undecided.clear();
         for (id, tests) in pending {
             let hidden = tests.iter().all(|t| {
-                maps.get(&t.element)
-                    .is_some_and(|m| m.hidden(&t.target, t.eye, t.t))
+                maps.get(&t.element).is_some_and(|m| {
+                    m.hidden(&t.target, t.eye, t.t)
+                        || t.alts.iter().any(|a| m.hidden(a, t.eye, t.t))
+                })
             });
             if hidden {
                 undecided.push(id);
@@ -528,8 +605,10 @@ impl ErosionMethod {
 
     /// Build the occlusion map of `element` from the cell centre.
     fn render(&self, map: &mut PolarMap, element: Element, ctx: &CellCtx) {
-        let eroded = self.eroded(element, ctx.half, ctx.fill_dm);
-        map.march(&eroded, ctx.s);
+        match &*self.eroded(element, ctx.half, ctx.fill_dm) {
+            Eroded::Whole(p) => map.march(p, ctx.s),
+            Eroded::Tiled(t) => map.march(t, ctx.s),
+        }
     }
 }
 

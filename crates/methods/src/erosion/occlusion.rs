@@ -24,7 +24,10 @@
 //! Blockers of a bin are kept as a Pareto staircase (`r_a` increasing, `h` increasing):
 //! a blocker both farther and lower than another never decides anything.
 
-use super::field::{MinPyramid, DM};
+#[cfg(test)]
+use super::field::MinPyramid;
+use super::field::DM;
+use super::tiles::Occluders;
 use sightline_geom::{Aabb2, DVec2};
 use std::f64::consts::TAU;
 
@@ -267,14 +270,14 @@ impl PolarMap {
     /// A sector gives a blocker only if it stands higher than every eye tested in the
     /// bin and than the blockers already found no farther. So a run of consecutive
     /// sectors is skipped at once when an *upper* bound of the raster over the run's
-    /// bounding box ([`MinPyramid::max_over`]) is no higher: no sector of the run could
+    /// bounding box ([`Occluders::max_at_most`]) is no higher: no sector of the run could
     /// have given a blocker. Runs double while they succeed, halve at each failure and
     /// restart at one sector after a new blocker; the sectors are those of the one-by-one march, and the early
     /// stop is checked at the end of a skipped run (its condition only grows with the
     /// radius and no blocker was added inside), so the blockers are exactly those of the
     /// one-by-one march (`march_one_by_one`, kept for the tests).
-    pub fn march(&mut self, grid: &MinPyramid, eye: DVec2) {
-        let radii = self.radii(grid);
+    pub fn march<R: Occluders>(&mut self, grid: &R, eye: DVec2) {
+        let radii = self.radii(grid.pixel_m());
         let w = self.bins.width;
         let bulge_k = 1.0 - w.cos();
         let sector_box = |da: DVec2, db: DVec2, r: f64, r1: f64| {
@@ -308,8 +311,9 @@ impl PolarMap {
                     let end = (k + run).min(n_sec);
                     if end - k >= 2 {
                         let r_end = radii[end];
-                        let hmax = grid.max_over(sector_box(da, db, r, r_end)) as f64 * DM;
-                        if hmax <= floor_h {
+                        let skip = dm_at_most(floor_h)
+                            .is_some_and(|lim| grid.max_at_most(sector_box(da, db, r, r_end), lim));
+                        if skip {
                             if stop(r_end) {
                                 break;
                             }
@@ -345,8 +349,7 @@ impl PolarMap {
     /// The near radii of the march's sectors (sector `k` is `[radii[k], radii[k+1]]`),
     /// up to the farthest reach: half a pixel near the eye, so that a wall two pixels
     /// thick holds a whole sector; about square sectors farther out.
-    fn radii(&self, grid: &MinPyramid) -> Vec<f64> {
-        let d = grid.levels[0].pixel_m;
+    fn radii(&self, d: f64) -> Vec<f64> {
         let w = self.bins.width;
         let far = self.reach.iter().copied().fold(-1.0f64, f64::max);
         let mut radii = vec![0.0f64];
@@ -407,6 +410,22 @@ impl PolarMap {
             .iter()
             .all(|&(bin, rho)| bin_hidden(&self.stairs[bin], rho, e, t))
     }
+}
+
+/// The greatest height `v` (dm) with `v · DM ≤ h` in floating point (None if none):
+/// `max ≤ v` decides exactly as `max · DM ≤ h`.
+fn dm_at_most(h: f64) -> Option<u16> {
+    if !(h >= 0.0) {
+        return None;
+    }
+    let mut v = (h / DM).floor().min(u16::MAX as f64) as u16;
+    while v < u16::MAX && f64::from(v + 1) * DM <= h {
+        v += 1;
+    }
+    while v > 0 && f64::from(v) * DM > h {
+        v -= 1;
+    }
+    (f64::from(v) * DM <= h).then_some(v)
 }
 
 fn bin_hidden(stairs: &[(f64, f64)], rho: f64, e: f64, t: f64) -> bool {

@@ -52,7 +52,7 @@
 //! cells), for about 1.5 × its time.
 //!
 //! **Fourth level** (session 4): `erosion-rays` now refines to
-//! [`super::RAYS_MAX_DEPTH`] = 4 levels (the others stay at 3). `sightline check`, 20
+//! [`super::RAYS_MAX_DEPTH`] = 4 levels (the other methods had 3 then). `sightline check`, 20
 //! street cells of 25 m at z 1.5..2.0 (`erosion_street_cells`), release, single
 //! thread, 2-core VM under shared load (load ≈ 3): Den Haag over median 5.76 → 2.61
 //! (p90 6.30 → 2.88, hidden 56 % → 80 %; `erosion` 4.11), Lyon 1.50 → 1.33 (p90 1.68 →

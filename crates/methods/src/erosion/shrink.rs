@@ -19,8 +19,19 @@
 //!   (`O ⊂ R ⊕ X`): the shrinking collapses the piece onto the cell's axis — the
 //!   analytic sweep of Fig. 7 where every chord is shorter than `|X|`;
 //! * a *corner* piece (e.g. `x ≥ x1`, `y ≥ y1`): the diagonal through the two other
-//!   corners supports the shaft; the piece is used unshrunk (`0 ∈ X`);
+//!   corners supports the shaft; the piece is used unshrunk (`0 ∈ X`), or shrunk by
+//!   the same sweep along the diagonal ([`shrunk_corner`]);
 //! * the *centre* piece (overlapping the cell's footprint): visible.
+//!
+//! **Any valid shrinking will do.** Theorem 1 holds for every `R` with `O ⊂ R ⊕ X`,
+//! and a corner piece has several: the piece itself (`0 ∈ X`) and, along the
+//! diagonal, the segments of both extreme placements ([`shrunk_corner`]). They hide
+//! different things — a shrunk occludee moved sideways may look down an open street
+//! the piece itself is hidden from, and the other way round — so a piece is hidden as
+//! soon as *one* of them is (the `erosion` method tests the three on the same
+//! occlusion map: a tighter PVS with the same guarantee). The same holds across a side
+//! (the collapsed segment may sit anywhere its length still covers the piece), but
+//! there the extra tests cost far more than they hide.
 
 use super::erode::Element;
 use sightline_geom::polygon::ring_signed_area;
@@ -168,6 +179,57 @@ pub fn shrunk_side(side: Element, piece: &Piece, cell: Aabb2) -> [DVec2; 2] {
     }
 }
 
+/// The shrunk occludee `R` of a corner piece for the `erosion` method: segments such
+/// that `piece ⊂ R ⊕ X` for the diagonal `X` of `corner` (absolute coordinates).
+///
+/// The analytic shrinking of §4.4 (Fig. 7) for a segment element, on the piece's
+/// bounding box in the frame of the diagonal: with `u` along `X` (half length `n`) and
+/// `v` across it, a box `[s0, s1] × [w0, w1]` no longer than `2n` along `u` is covered
+/// by `R ⊕ X` for `R` the segment `{c u + w v : w ∈ [w0, w1]}` with `c` anywhere in
+/// `[s1 − n, s0 + n]`; a longer box is cut along `u` into strips no longer than `2n`,
+/// one segment each. Both extreme choices of `c` are returned: each is a valid `R`.
+pub fn shrunk_corner(corner: Element, piece: &Piece, cell: Aabb2) -> [Vec<[DVec2; 2]>; 2] {
+    let half = cell.size() * 0.5;
+    let c = cell.center();
+    let dir = match corner {
+        Element::AntiDiagonal => DVec2::new(half.x, -half.y),
+        _ => DVec2::new(half.x, half.y),
+    };
+    let n = dir.length();
+    if !(n > 0.0) || piece.ring.is_empty() {
+        return [Vec::new(), Vec::new()];
+    }
+    let u = dir / n;
+    let v = u.perp();
+    let (mut s0, mut s1, mut w0, mut w1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    for p in &piece.ring {
+        let (s, w) = ((*p - c).dot(u), (*p - c).dot(v));
+        (s0, s1, w0, w1) = (s0.min(s), s1.max(s), w0.min(w), w1.max(w));
+    }
+    // Strips a hair shorter than 2n, so that rounding never leaves a gap.
+    let strip = 2.0 * n * (1.0 - 1e-9);
+    let k = ((s1 - s0) / strip).ceil().max(1.0);
+    if !k.is_finite() || k > 1e4 {
+        return [Vec::new(), Vec::new()];
+    }
+    let width = (s1 - s0) / k;
+    let at = |end: usize| -> Vec<[DVec2; 2]> {
+        (0..k as usize)
+            .map(|i| {
+                let (lo, hi) = (s0 + i as f64 * width, s0 + (i + 1) as f64 * width);
+                let x = if end == 0 { hi - n } else { lo + n };
+                [c + u * x + v * w0, c + u * x + v * w1]
+            })
+            .collect()
+    };
+    [at(0), at(1)]
+}
+
 /// How much the eye must be raised above the cell top `z1` for an occludee piece of
 /// top height `t` tested with a segment element.
 ///
@@ -269,6 +331,68 @@ mod tests {
         for v in &ring {
             let x = v.x - 5.0;
             assert!(x >= a.x && x <= b.x && (v.y - 5.0).abs() <= 5.0);
+        }
+    }
+
+    /// Every point of a piece lies in `R ⊕ X` for each shrunk occludee `R` of a corner
+    /// piece (both choices, short and long pieces).
+    #[test]
+    fn shrunk_corners_cover_the_piece() {
+        let cell = Aabb2::new(DVec2::new(0.0, 0.0), DVec2::new(10.0, 6.0));
+        let (a, b) = (5.0, 3.0);
+        // X as a set of vectors from the cell centre: the segment p → q.
+        let covered = |segs: &[[DVec2; 2]], p: DVec2, q: DVec2, o: DVec2| {
+            segs.iter().any(|&[r0, r1]| {
+                // o − x ∈ [r0, r1] for some x on [p, q]: sample both segments finely.
+                (0..=200).any(|i| {
+                    let x = p + (q - p) * (i as f64 / 200.0);
+                    let y = o - x;
+                    let d = r1 - r0;
+                    let t = if d.length_squared() > 0.0 {
+                        ((y - r0).dot(d) / d.length_squared()).clamp(0.0, 1.0)
+                    } else {
+                        0.0
+                    };
+                    (r0 + d * t).distance(y) < 0.06
+                })
+            })
+        };
+        let rings = [
+            // Upper right, small and long along the anti-diagonal.
+            vec![
+                DVec2::new(12.0, 8.0),
+                DVec2::new(15.0, 8.5),
+                DVec2::new(13.0, 11.0),
+            ],
+            vec![
+                DVec2::new(10.5, 30.0),
+                DVec2::new(40.0, 6.5),
+                DVec2::new(41.0, 8.0),
+                DVec2::new(12.0, 31.0),
+            ],
+            // Lower right (diagonal).
+            vec![
+                DVec2::new(11.0, -2.0),
+                DVec2::new(20.0, -9.0),
+                DVec2::new(14.0, -1.0),
+            ],
+        ];
+        for ring in &rings {
+            let ps = pieces(ring, cell);
+            assert_eq!(ps.len(), 1);
+            let Region::Corner(el) = ps[0].region else {
+                panic!("{:?}", ps[0].region)
+            };
+            let [p, q] = [
+                el.vertices(DVec2::new(a, b))[0],
+                el.vertices(DVec2::new(a, b))[1],
+            ];
+            for segs in shrunk_corner(el, &ps[0], cell) {
+                assert!(!segs.is_empty());
+                for o in ring {
+                    assert!(covered(&segs, p, q, *o), "{el:?} {o:?} {segs:?}");
+                }
+            }
         }
     }
 
