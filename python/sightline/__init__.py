@@ -159,6 +159,7 @@ class Scene:
         height: str = "height",
         min_height: str | None = None,
         name: str | None = None,
+        strict: bool = False,
     ) -> "Scene":
         """Import a GeoPandas GeoDataFrame of Polygon/MultiPolygon buildings.
 
@@ -169,7 +170,10 @@ class Scene:
         to WGS84 lon/lat, then projected as the CLI does). Without a CRS, or with
         EPSG:4326 (which GeoPandas reports for every GeoJSON file), lon/lat is detected
         from the coordinates as the CLI does. Every validation and repair rule is the GeoJSON
-        importer's.
+        importer's: a row the importer cannot use (a negative height, a base above its
+        top) is skipped with a counted ``skipped-feature`` warning naming it, or raises
+        with ``strict=True``; missing columns, non-numeric or NaN heights and geometries
+        that are not polygons always raise.
 
         >>> import geopandas as gpd                                          # doctest: +SKIP
         >>> gdf = gpd.read_file("data/lyon1_bdtopo.geojson")                 # doctest: +SKIP
@@ -178,7 +182,7 @@ class Scene:
         from ._geo import geodataframe_to_geojson
 
         text, crs = geodataframe_to_geojson(gdf, height, min_height, name)
-        return cls(_native.NativeScene.from_geojson(text, "<GeoDataFrame>", crs))
+        return cls(_native.NativeScene.from_geojson(text, "<GeoDataFrame>", crs, strict))
 
     def __len__(self) -> int:
         return len(self._native)

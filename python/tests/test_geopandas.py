@@ -68,11 +68,15 @@ def test_bad_heights_raise(bad):
         sightline.Scene.from_geodataframe(gdf)
 
 
-def test_negative_height_is_the_importers_error():
+def test_negative_height_is_skipped_or_the_strict_error():
     gdf = frame()
     gdf["height"] = [10.0, -3.0]
+    scene = sightline.Scene.from_geodataframe(gdf)
+    assert len(scene) == 1
+    skipped = [w for w in scene.info()["warnings"] if w["kind"] == "skipped-feature"]
+    assert len(skipped) == 1 and "negative height" in skipped[0]["message"], skipped
     with pytest.raises(SceneError, match="feature 1"):
-        sightline.Scene.from_geodataframe(gdf)
+        sightline.Scene.from_geodataframe(gdf, strict=True)
 
 
 @pytest.mark.parametrize("geom", [Point(X0, Y0), LineString([(X0, Y0), (X0 + 5, Y0)]), None])
