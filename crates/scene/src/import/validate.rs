@@ -66,7 +66,7 @@ impl Diagnostics {
         self.warn(
             "skipped-feature",
             Some(index),
-            format!("feature {index} skipped: {message}"),
+            format!("skipped: {message}"),
         );
         self.first_rejection.get_or_insert((index, message));
         Ok(())
