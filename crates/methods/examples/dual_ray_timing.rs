@@ -19,12 +19,12 @@ use sightline_scene::generate::metropolis;
 use std::sync::Arc;
 use std::time::Instant;
 
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
+/// Median, 0 for none (the printed tables' convention).
+fn median(v: &[f64]) -> f64 {
     if v.is_empty() {
         0.0
     } else {
-        v[v.len() / 2]
+        sightline_stats::median(v)
     }
 }
 
@@ -61,7 +61,7 @@ fn time_cells(m: &DualRay, cells: &[ViewCell], quiet: bool) -> (f64, f64, Vec<Ve
         ms.push(dt);
         out.push(pvs);
     }
-    (median(&mut ms), median(&mut cpu), out)
+    (median(&ms), median(&cpu), out)
 }
 
 /// Least-squares slope of `ln y` against `ln x`.
@@ -103,8 +103,8 @@ fn scaling(max_n: usize, size: f64, count: usize, res: u32) {
         let prep = t.elapsed().as_secs_f64();
         let cells = crossing_cells(&scene, size, count);
         let (_, cpu, pvs) = time_cells(&m, &cells, true);
-        let mut sizes: Vec<f64> = pvs.iter().map(|p| p.len() as f64).collect();
-        let pvs_med = median(&mut sizes);
+        let sizes: Vec<f64> = pvs.iter().map(|p| p.len() as f64).collect();
+        let pvs_med = median(&sizes);
         let rss = peak_rss_kb().map_or(f64::NAN, |kb| kb as f64 / 1048576.0);
         println!(
             "| {n} | {prep:.1} | {cpu:.1} | {pvs_med:.0} | {:.3} | {rss:.2} |",
@@ -205,9 +205,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             println!(
                 "{size} m cells at {res}²: median {:.1} ms/cell over {} cells (single thread; \
                  CPU median {:.1} ms, total {:.0} ms)",
-                median(&mut ms),
+                median(&ms),
                 cells.len(),
-                median(&mut cpu),
+                median(&cpu),
                 cpu.iter().sum::<f64>()
             );
         }
@@ -224,7 +224,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
             println!(
                 "{size} m cells: seed rays median {:.1} ms/cell CPU over {} cells",
-                median(&mut cpu),
+                median(&cpu),
                 cells.len()
             );
         }
@@ -241,7 +241,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
             println!(
                 "9-cell neighbourhood of {size} m cells at {res}² on 2 threads: median {:.1} ms",
-                median(&mut ms)
+                median(&ms)
             );
         }
         "check" => {

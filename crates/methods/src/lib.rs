@@ -1,14 +1,13 @@
 //! Visibility methods of sightline, each in its own module behind one trait.
 //!
-//! A method is *prepared* once for a scene ([`create`]) — it builds whatever
+//! A method ([`Method`], or its name) is *prepared* once for a scene ([`create`]) — it builds whatever
 //! per-scene structures it needs (fused occluders, kd-trees, caches) — and then
 //! answers [`VisibilityMethod::pvs`] for any number of viewcells, from any thread.
 //!
 //! The guarantee of every conservative method: it may report a hidden object as
 //! visible, never a visible object as hidden.
 //!
-//! Architecture (imports go one way, from the methods down to the shared leaves; erosion
-//! still names the prisms through their re-export in `dual_ray`):
+//! Architecture (imports go one way, from the methods down to the shared leaves):
 //! * [`erosion`] — Décoret, Debunne & Sillion 2003: `erosion`, `erosion-segment`,
 //!   `erosion-cell`, `shrink-sphere` (after Wonka et al. 2000) and `erosion-rays` (§7.1);
 //! * [`dual_ray`] — Koltun, Chrysanthou & Cohen-Or 2001: `dual-ray` (§5.2) and

@@ -603,7 +603,7 @@ mod tests {
 #[cfg(test)]
 mod cull_props {
     use super::*;
-    use crate::dual_ray::occluders::collect_occluders;
+    use crate::occluders::collect_occluders;
     use proptest::prelude::*;
     use sightline_geom::{DVec3, Polygon};
     use sightline_scene::Object;

@@ -63,8 +63,7 @@
 
 mod discrete;
 mod exact;
-// Erosion imports the shared prisms through `dual_ray::occluders`.
-pub(crate) mod occluders;
+mod occluders;
 mod plane;
 mod table1;
 mod vo;

@@ -26,8 +26,6 @@
 use crate::occluders::{BucketGrid, Occluder};
 use sightline_geom::{orient2d, DVec2, Orientation};
 
-pub(crate) use crate::occluders::{collect_occluders, local_origin};
-
 /// Two edges of a stack closer than this (at both slab ends) are the same wall: a party
 /// wall between touching buildings. One nanometre: float noise, not a gap anyone sees.
 pub(crate) const TOUCH_EPS_M: f64 = 1e-9;

@@ -64,19 +64,6 @@ pub(crate) fn occluded_area_m2(scene: &Scene, pvs: &[u32]) -> f64 {
         .sum()
 }
 
-fn median(v: &mut [f64]) -> f64 {
-    if v.is_empty() {
-        return 0.0;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 /// Run Table 1: for each `(cell size, cells)` group, the exact algorithm once and the
 /// discretized one at every resolution, sequentially (one thread).
 pub fn table1(
@@ -104,7 +91,7 @@ pub fn table1(
             cell_size_m: *size,
             resolution_px: 0,
             cells: cells.len(),
-            ms_median: median(&mut times),
+            ms_median: sightline_stats::median(&times),
             ms_mean: mean,
             pvs_mean: pvs_sum as f64 / n,
             overestimation: 0.0,
@@ -132,7 +119,7 @@ pub fn table1(
                 cell_size_m: *size,
                 resolution_px: r,
                 cells: cells.len(),
-                ms_median: median(&mut times),
+                ms_median: sightline_stats::median(&times),
                 ms_mean: mean,
                 pvs_mean: pvs_sum as f64 / n,
                 overestimation: if pe > 0.0 { (pe - pc) / pe } else { 0.0 },

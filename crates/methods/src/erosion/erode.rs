@@ -8,7 +8,8 @@
 //! `H(v + x) ≥ G(q) ≥ E(p)` — the raster `E` is an inner bound of the exact erosion, at
 //! any pixel size. This replaces the paper's polygon booleans (equation (1)): same
 //! result up to one pixel, a hundred times faster, and touching buildings are fused by
-//! construction (NOTES §1).
+//! construction (erosion does not distribute over a union: eroding buildings one by one
+//! would open a gap of the cell's width along every party wall).
 //!
 //! * An axis-parallel element (a side of the cell, the cell itself) is a rectangle of
 //!   pixel offsets: two separable running minima.

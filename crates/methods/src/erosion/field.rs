@@ -1,5 +1,6 @@
 //! The occluders of a scene as one fused, conservatively rasterized height field
-//! (NOTES §1, §2), and the filling of closed courtyards.
+//! (erosion acts on the union of the buildings, and a union drawn piece by piece would
+//! crack along shared edges), and the filling of closed courtyards.
 //!
 //! Occluders are the *inner* bounds of the objects (§4.2) standing on the ground; their
 //! union with the ground half-space is a height field `H(x, y)`. It is stored on a
@@ -585,8 +586,8 @@ impl HeightField {
     }
 
     /// Whether the cell `rect` with top `z1` may hold a free viewpoint: some pixel of it
-    /// is not entirely inside occluders higher than `z1` (SPEC §3: points inside blocks
-    /// are not viewpoints).
+    /// is not entirely inside occluders higher than `z1` (points inside blocks are not
+    /// viewpoints).
     pub fn has_free_space(&self, rect: Aabb2, z1: f64) -> bool {
         let top = (z1 / DM).floor().clamp(0.0, u16::MAX as f64) as u16;
         let (i0, i1) = self.g.range(0, rect.min.x, rect.max.x);

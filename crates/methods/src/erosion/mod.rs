@@ -11,7 +11,7 @@
 //! at any resolution (the parameter only trades tightness for time).
 //!
 //! Pipeline (one module per concern):
-//! * [`field`]: the inner bounds of all objects fused into one height field (NOTES §1),
+//! * [`field`]: the inner bounds of all objects fused into one height field (their union: touching buildings leave no gap),
 //!   rasterized conservatively (inner rule on the union), with closed courtyards filled
 //!   where that provably hides nothing visible.
 //! * [`erode`]: erosion of that raster by the structuring elements (§3.1, §4.3) — a
@@ -53,7 +53,7 @@ pub mod rays;
 pub mod shrink;
 pub mod tiles;
 
-use crate::dual_ray::occluders::{collect_occluders, local_origin};
+use crate::occluders::{collect_occluders, local_origin};
 use crate::seed::{SeedGrid, SeedScratch};
 use crate::{MethodError, MethodOptions, VisibilityMethod};
 use erode::Element;
@@ -437,7 +437,7 @@ impl ErosionMethod {
     /// metres instead of the whole cell, which is Theorem 1's price (§7 "Bad
     /// scenario"). Cells of one depth share one shape, hence one set of eroded
     /// occluders (§5.1); an object found visible is not tested again; a part with no
-    /// free space sees nothing (SPEC §3).
+    /// free space sees nothing (visibility is defined from free space).
     fn refine(
         &self,
         cell: &ViewCell,

@@ -7,7 +7,7 @@
 //! gives the bin a *blocker* `(r_a, h)` at its near radius — the *inner* coverage rule,
 //! at the *farthest* depth of the sector's entry. Any sight line in that bin whose
 //! height at horizontal distance `r_a` is below `h` is blocked there. Because the raster
-//! is of the fused height field, shared walls leave no crack (NOTES §2).
+//! is of the fused height field, shared walls leave no crack.
 //!
 //! An occludee is tested through its nearest distance `ρ_min` in each bin it touches
 //! (the *outer* rule: every touched bin counts, with the nearest depth): a target at

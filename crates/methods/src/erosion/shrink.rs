@@ -9,7 +9,7 @@
 //! 3D, see [`eye_raise`].
 //!
 //! An occludee footprint is cut by the lines `x = x0`, `x = x1`, `y = y0`, `y = y1`
-//! of the cell into up to nine *pieces* (this handles the degenerate shafts of NOTES §5:
+//! of the cell into up to nine *pieces* (this handles the degenerate shafts, §4.4's "second precaution":
 //! an occludee overlapping the cell's x or y range is split instead of being tested
 //! with a wrong segment):
 //! * a *side* piece (e.g. `x ≥ x1`, `y0 ≤ y ≤ y1`): every sight line from the cell
