@@ -20,7 +20,7 @@
 //!   0°, 45°, 90°, 135° — eroded by each in turn (Appendix B: `O ⊖ (X ⊕ Y) =
 //!   (O ⊖ X) ⊖ Y`; each discrete step only shrinks more, so the chain stays inner).
 
-use super::field::Grid;
+use super::field::{snap, Grid};
 use sightline_geom::DVec2;
 
 /// The horizontal structuring elements used for a box viewcell of half sizes `(a, b)`,
@@ -101,19 +101,6 @@ fn offsets(lo: f64, hi: f64, pixel_m: f64) -> (i64, i64) {
         snap(lo / pixel_m).floor() as i64,
         snap(hi / pixel_m).ceil() as i64,
     )
-}
-
-/// `x`, or the nearest integer if it is within 1e-9 of it.
-#[inline]
-pub(crate) fn snap(x: f64) -> f64 {
-    // Nearest integer without a libm call (hot in the occlusion-map march).
-    let t = (x + 0.5) as i64;
-    let r = if (t as f64) > x + 0.5 { t - 1 } else { t } as f64;
-    if (x - r).abs() < 1e-9 {
-        r
-    } else {
-        x
-    }
 }
 
 /// One step of an erosion: a min-filter with zero outside the raster.

@@ -98,8 +98,8 @@ impl Grid {
             self.origin.y
         };
         let inv = 1.0 / self.pixel_m;
-        let lo = floor(super::erode::snap((a - o) * inv));
-        let hi = -floor(-super::erode::snap((b - o) * inv)) - 1;
+        let lo = floor(snap((a - o) * inv));
+        let hi = -floor(-snap((b - o) * inv)) - 1;
         (lo, hi.max(lo))
     }
 
@@ -312,7 +312,7 @@ impl RowScan {
                         let (xa, xb) = (p.x.min(q.x), p.x.max(q.x));
                         bounds[r].push((xa, xb));
                         let v = (p.y - grid.origin.y) / d;
-                        if super::erode::snap(v).fract() != 0.0 {
+                        if snap(v).fract() != 0.0 {
                             // Not on a pixel edge: inside the open band.
                             open[r].push((xa, xb));
                         }
@@ -352,10 +352,7 @@ impl RowScan {
             self.open[r]
                 .iter()
                 .map(|&(a, b)| {
-                    let (a, b) = (
-                        super::erode::snap((a - o) / d),
-                        super::erode::snap((b - o) / d),
-                    );
+                    let (a, b) = (snap((a - o) / d), snap((b - o) / d));
                     (a.floor() as i64, b.ceil() as i64 - 1)
                 })
                 // A vertical edge lying exactly on a pixel edge meets no interior: (n, n − 1).
@@ -670,6 +667,19 @@ fn priority_flood(g: &Grid) -> Grid {
         }
     }
     f
+}
+
+/// `x`, or the nearest integer if it is within 1e-9 of it.
+#[inline]
+pub(crate) fn snap(x: f64) -> f64 {
+    // Nearest integer without a libm call (hot in the occlusion-map march).
+    let t = (x + 0.5) as i64;
+    let r = if (t as f64) > x + 0.5 { t - 1 } else { t } as f64;
+    if (x - r).abs() < 1e-9 {
+        r
+    } else {
+        x
+    }
 }
 
 #[cfg(test)]
