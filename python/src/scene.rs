@@ -9,8 +9,8 @@ use sightline_geom::ViewCell;
 use sightline_methods::check::{TruthOptions, TruthScene};
 use sightline_methods::{MethodOptions, VisibilityMethod};
 use sightline_scene::import::{Crs, ImportOptions};
-use sightline_scene::{cells, Geometry, ObjectKind, Scene};
-use std::collections::{BTreeMap, HashMap};
+use sightline_scene::{cells, Scene};
+use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex, OnceLock};
 
@@ -159,33 +159,6 @@ pub fn on_pool<T: Send>(pool: Option<&rayon::ThreadPool>, f: impl FnOnce() -> T 
     }
 }
 
-/// Triangle count without triangulating (as `sightline info`): a polygon with `n`
-/// vertices and `h` holes triangulates into `n + 2h − 2` triangles; a prism adds two per
-/// wall edge.
-fn triangle_count(scene: &Scene) -> usize {
-    let caps =
-        |p: &sightline_geom::Polygon| (p.vertex_count() + 2 * p.holes.len()).saturating_sub(2);
-    scene
-        .objects
-        .iter()
-        .map(|o| match &o.geometry {
-            Geometry::Blocks(ps) => ps
-                .iter()
-                .map(|p| {
-                    let c = caps(&p.footprint);
-                    if p.top <= p.base {
-                        c
-                    } else {
-                        2 * p.footprint.vertex_count() + c * if p.base > 0.0 { 2 } else { 1 }
-                    }
-                })
-                .sum(),
-            Geometry::Flat(ps) => ps.iter().map(caps).sum(),
-            Geometry::Mesh(m) => m.triangles.len(),
-        })
-        .sum()
-}
-
 impl NativeScene {
     fn new(scene: Scene, name: String) -> Self {
         NativeScene {
@@ -283,22 +256,7 @@ impl NativeScene {
 
     /// The `sightline info --json` report, as JSON text.
     fn info_json(&self) -> PyResult<String> {
-        let s = &self.scene;
-        let count = |k: ObjectKind| s.objects.iter().filter(|o| o.kind() == k).count();
-        let b = s.bounds;
-        let counts: BTreeMap<String, usize> = s.warning_counts().into_iter().collect();
-        let v = serde_json::json!({
-            "scene": self.name,
-            "objects": s.len(),
-            "blocks": count(ObjectKind::Blocks),
-            "flat": count(ObjectKind::Flat),
-            "meshes": count(ObjectKind::Mesh),
-            "triangles": triangle_count(s),
-            "bounds": [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z],
-            "fingerprint": format!("{:016x}", s.fingerprint()),
-            "warning_counts": counts,
-            "warnings": s.warnings,
-        });
+        let v = self.scene.info(self.name.clone());
         serde_json::to_string(&v).map_err(|e| err(Kind::Scene, e))
     }
 

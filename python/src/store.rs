@@ -9,10 +9,10 @@ use crate::scene::{
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use sightline_geom::{DVec3, ViewCell};
-use sightline_methods::check::{aggregate, check_cell_prepared, TruthOptions};
-use sightline_methods::{MethodError, VisibilityMethod, METHOD_NAMES};
+use sightline_methods::check::{aggregate, check_cell_prepared, report_json, TruthOptions};
+use sightline_methods::VisibilityMethod;
 use sightline_pvs::build::journal_path;
-use sightline_pvs::{BuildOptions, PvsFile, Shard};
+use sightline_pvs::{BuildOptions, PvsFile, Shard, StoredPvs};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
@@ -154,38 +154,6 @@ pub fn cells_json(cells: &[u8]) -> PyResult<String> {
     Ok(out)
 }
 
-/// A `.pvs` file answering as the method it was built with.
-struct StoredPvs(PvsFile);
-
-impl VisibilityMethod for StoredPvs {
-    fn name(&self) -> &'static str {
-        let m = &self.0.header().method;
-        METHOD_NAMES
-            .iter()
-            .find(|n| **n == m)
-            .copied()
-            .unwrap_or("pvs-file")
-    }
-
-    fn is_conservative(&self) -> bool {
-        self.0.header().method != "sampled"
-    }
-
-    fn params(&self) -> Vec<(String, String)> {
-        self.0.header().params.clone()
-    }
-
-    fn pvs(&self, cell: &ViewCell) -> Result<Vec<u32>, MethodError> {
-        let i = self
-            .0
-            .cells()
-            .iter()
-            .position(|c| c == cell)
-            .ok_or_else(|| MethodError::BadCell("not a cell of the .pvs file".into()))?;
-        self.0.pvs(i).map_err(|e| MethodError::Other(e.to_string()))
-    }
-}
-
 /// `sightline check --json`: a `.pvs` file (`k` of its cells, evenly spread) or a method
 /// (on `cells`, or on `k` street cells) against the ground truth.
 #[pyfunction]
@@ -241,12 +209,9 @@ pub fn check(
                     ),
                 )
             })?;
-            let stored = f.stored();
-            let k = k.unwrap_or(20).min(stored.len());
-            let picked = (0..k)
-                .map(|i| f.cells()[stored[i * stored.len() / k] as usize])
-                .collect();
-            (Arc::new(StoredPvs(f)), picked)
+            let stored = StoredPvs(f);
+            let picked = stored.sample_cells(k.unwrap_or(20));
+            (Arc::new(stored), picked)
         }
         (None, Some(name)) => {
             let opts = method_options(name, resolution, sweep, planes)?;
@@ -289,34 +254,7 @@ pub fn check(
         .map(|per_cell| aggregate(m.name(), per_cell))
         .map_err(method_err)
     })?;
-    let missed: Vec<serde_json::Value> = report
-        .per_cell
-        .iter()
-        .flat_map(|c| {
-            c.missed.iter().map(move |x| {
-                serde_json::json!({"cell": c.cell, "id": x.id, "viewpoint": x.viewpoint, "direction": x.direction})
-            })
-        })
-        .collect();
-    let v = serde_json::json!({
-        "method": report.method,
-        "params": m.params().into_iter().collect::<std::collections::BTreeMap<_, _>>(),
-        "conservative": m.is_conservative(),
-        "cells": report.cells,
-        "missed": report.missed,
-        "over_median": report.over_median,
-        "over_p90": report.over_p90,
-        "over_max": report.over_max,
-        "hidden_fraction": report.hidden_fraction,
-        "pvs_ms_median": report.pvs_ms_median,
-        "truth_ms_median": report.truth_ms_median,
-        "missed_ids": missed,
-        "per_cell": report.per_cell.iter().map(|c| serde_json::json!({
-            "cell": c.cell, "pvs": c.pvs_len, "vs": c.vs_len, "missed": c.missed.len(),
-            "over": c.over, "hidden_fraction": c.hidden_fraction,
-            "pvs_ms": c.pvs_seconds * 1e3, "truth_ms": c.truth_seconds * 1e3,
-        })).collect::<Vec<_>>(),
-    });
+    let v = report_json(&report, m.as_ref());
     serde_json::to_string(&v).map_err(|e| err(Kind::Method, e))
 }
 

@@ -29,8 +29,8 @@
 
 //!
 //! Modules depend on each other in one direction only: `crc`, `error`, `partition` and
-//! `index` are leaves; `delta` → `format` → `journal`, `query` → `shard` (merge) and
-//! `build`.
+//! `index` are leaves; `delta` → `format` → `journal`, `query` → `shard` (merge),
+//! `stored` and `build`.
 
 pub mod build;
 mod crc;
@@ -42,6 +42,7 @@ pub mod journal;
 mod partition;
 pub mod query;
 pub mod shard;
+mod stored;
 
 pub use build::{build, BuildOptions, BuildStats};
 pub use crc::{crc32, Crc32};
@@ -50,3 +51,4 @@ pub use format::{Header, FORMAT_VERSION, MAGIC};
 pub use partition::{Shard, SHARD_ENV};
 pub use query::PvsFile;
 pub use shard::merge;
+pub use stored::StoredPvs;

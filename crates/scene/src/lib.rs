@@ -13,9 +13,11 @@
 
 pub mod model;
 
+pub use info::SceneInfo;
 pub use model::{Geometry, Mesh, Object, ObjectKind, Prism, Scene, Warning};
 pub mod cells;
 pub mod export;
 pub mod generate;
 pub mod import;
 pub mod index;
+pub mod info;

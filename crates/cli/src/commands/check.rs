@@ -4,9 +4,9 @@ use crate::cli::Command;
 use crate::common::{load_scene, method_options, print_json, progress};
 use anyhow::{bail, Context};
 use sightline_geom::ViewCell;
-use sightline_methods::check::{check_cells, street_cells, TruthOptions};
-use sightline_methods::{create, MethodError, VisibilityMethod, METHOD_NAMES};
-use sightline_pvs::PvsFile;
+use sightline_methods::check::{check_cells, report_json, street_cells, TruthOptions};
+use sightline_methods::{create, VisibilityMethod};
+use sightline_pvs::{PvsFile, StoredPvs};
 use std::sync::Arc;
 
 /// Side of the cells picked when `--cells` is a number (metres).
@@ -62,18 +62,15 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
                 scene.scene.display()
             )
         })?;
-        let stored = f.stored();
         let k: usize = match cells.as_deref() {
             None => 20,
             Some(c) => c.parse().ok().filter(|&k| k > 0).with_context(|| {
                 format!("with a .pvs file, --cells is a number of cells to sample, got '{c}'")
             })?,
         };
-        let k = k.min(stored.len());
-        let picked: Vec<ViewCell> = (0..k)
-            .map(|i| f.cells()[stored[i * stored.len() / k] as usize])
-            .collect();
-        (Box::new(StoredPvs(f)), picked)
+        let stored = StoredPvs(f);
+        let picked = stored.sample_cells(k);
+        (Box::new(stored), picked)
     } else {
         let Some(method) = method else {
             bail!("check needs --method NAME (or a .pvs file)");
@@ -89,35 +86,9 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         pb.inc(1)
     })?;
     pb.finish_and_clear();
-    let missed: Vec<serde_json::Value> = report
-        .per_cell
-        .iter()
-        .flat_map(|c| {
-            c.missed.iter().map(move |x| {
-                serde_json::json!({"cell": c.cell, "id": x.id, "viewpoint": x.viewpoint, "direction": x.direction})
-            })
-        })
-        .collect();
+    let json_report = report_json(&report, m.as_ref());
     if json {
-        print_json(&serde_json::json!({
-            "method": report.method,
-            "params": m.params().into_iter().collect::<std::collections::BTreeMap<_, _>>(),
-            "conservative": m.is_conservative(),
-            "cells": report.cells,
-            "missed": report.missed,
-            "over_median": report.over_median,
-            "over_p90": report.over_p90,
-            "over_max": report.over_max,
-            "hidden_fraction": report.hidden_fraction,
-            "pvs_ms_median": report.pvs_ms_median,
-            "truth_ms_median": report.truth_ms_median,
-            "missed_ids": missed,
-            "per_cell": report.per_cell.iter().map(|c| serde_json::json!({
-                "cell": c.cell, "pvs": c.pvs_len, "vs": c.vs_len, "missed": c.missed.len(),
-                "over": c.over, "hidden_fraction": c.hidden_fraction,
-                "pvs_ms": c.pvs_seconds * 1e3, "truth_ms": c.truth_seconds * 1e3,
-            })).collect::<Vec<_>>(),
-        }))?;
+        print_json(&json_report)?;
     } else {
         println!(
             "{}: {} cells, missed {}, over median {:.3} p90 {:.3} max {:.3}, hidden {:.1} %, {:.2} ms/cell (truth {:.0} ms/cell)",
@@ -131,7 +102,7 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
             report.pvs_ms_median,
             report.truth_ms_median
         );
-        for x in &missed {
+        for x in json_report["missed_ids"].as_array().into_iter().flatten() {
             println!("missed: {x}");
         }
     }
@@ -143,32 +114,4 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         );
     }
     Ok(())
-}
-
-/// A `.pvs` file answering as the method it was built with: the stored set of the cell.
-struct StoredPvs(PvsFile);
-
-impl VisibilityMethod for StoredPvs {
-    fn name(&self) -> &'static str {
-        let m = &self.0.header().method;
-        METHOD_NAMES
-            .iter()
-            .find(|n| **n == m)
-            .copied()
-            .unwrap_or("pvs-file")
-    }
-
-    fn is_conservative(&self) -> bool {
-        self.0.header().method != "sampled"
-    }
-
-    fn pvs(&self, cell: &ViewCell) -> Result<Vec<u32>, MethodError> {
-        let i = self
-            .0
-            .cells()
-            .iter()
-            .position(|c| c == cell)
-            .ok_or_else(|| MethodError::BadCell("not a cell of the .pvs file".into()))?;
-        self.0.pvs(i).map_err(|e| MethodError::Other(e.to_string()))
-    }
 }

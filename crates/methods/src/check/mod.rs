@@ -249,3 +249,37 @@ pub fn street_cells(scene: &Scene, size_m: f64, z: (f64, f64), k: usize) -> Vec<
         .map(|i| free[i * free.len() / k + free.len() / (2 * k)])
         .collect()
 }
+
+/// The `check --json` report of `m` (the CLI's and the Python `check`'s): the aggregate,
+/// the method's parameters, every missed object with the sample that saw it, and the
+/// per-cell figures.
+pub fn report_json(report: &CheckReport, m: &dyn VisibilityMethod) -> serde_json::Value {
+    let missed: Vec<serde_json::Value> = report
+        .per_cell
+        .iter()
+        .flat_map(|c| {
+            c.missed.iter().map(move |x| {
+                serde_json::json!({"cell": c.cell, "id": x.id, "viewpoint": x.viewpoint, "direction": x.direction})
+            })
+        })
+        .collect();
+    serde_json::json!({
+        "method": report.method,
+        "params": m.params().into_iter().collect::<std::collections::BTreeMap<_, _>>(),
+        "conservative": m.is_conservative(),
+        "cells": report.cells,
+        "missed": report.missed,
+        "over_median": report.over_median,
+        "over_p90": report.over_p90,
+        "over_max": report.over_max,
+        "hidden_fraction": report.hidden_fraction,
+        "pvs_ms_median": report.pvs_ms_median,
+        "truth_ms_median": report.truth_ms_median,
+        "missed_ids": missed,
+        "per_cell": report.per_cell.iter().map(|c| serde_json::json!({
+            "cell": c.cell, "pvs": c.pvs_len, "vs": c.vs_len, "missed": c.missed.len(),
+            "over": c.over, "hidden_fraction": c.hidden_fraction,
+            "pvs_ms": c.pvs_seconds * 1e3, "truth_ms": c.truth_seconds * 1e3,
+        })).collect::<Vec<_>>(),
+    })
+}
