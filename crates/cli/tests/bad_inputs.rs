@@ -2,6 +2,9 @@
 //! and exactly one `error:` line naming the problem (`err-*`), or loads with a counted
 //! warning of the expected kind (`warn-*`); never a panic, never an output file.
 
+mod common;
+
+use common::sightline;
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -18,18 +21,6 @@ fn cases() -> Vec<(String, String)> {
             (f.to_string(), e.to_string())
         })
         .collect()
-}
-
-fn sightline(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_sightline"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
 }
 
 #[test]

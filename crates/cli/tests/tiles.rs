@@ -1,20 +1,10 @@
 //! `sightline tiles`: a tileset with its tile-PVS sidecar from a generated city and its
 //! `.pvs`; bad arguments give one `error:` line and write nothing.
 
-use std::path::Path;
-use std::process::Command;
+mod common;
 
-fn sightline(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_sightline"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use common::sightline;
+use std::path::Path;
 
 fn ok(args: &[&str]) -> String {
     let (code, out, err) = sightline(args);

@@ -8,13 +8,14 @@
 //
 // Environment: SIGHTLINE_BIN (default <repo>/target/debug/sightline), CHROMIUM
 // (default /usr/bin/chromium).
-import { spawn, execFileSync } from 'node:child_process';
+import { execFileSync } from 'node:child_process';
 import { mkdirSync, mkdtempSync, readFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import assert from 'node:assert/strict';
 import { chromium } from 'playwright-core';
+import { startServer } from './serve.mjs';
 
 const here = dirname(fileURLToPath(import.meta.url));
 const repo = resolve(here, '../../..');
@@ -26,23 +27,6 @@ const work = mkdtempSync(join(tmpdir(), 'sightline-tiles-e2e-'));
 function log(...a) { console.log('[tiles-e2e]', ...a); }
 function run(...args) { return execFileSync(bin, args, { encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] }); }
 
-function startServer(args) {
-  log(bin, args.join(' '));
-  const proc = spawn(bin, args, { stdio: ['ignore', 'pipe', 'pipe'] });
-  let stderr = '';
-  proc.stderr.on('data', (d) => { stderr += d; });
-  const url = new Promise((res, rej) => {
-    let out = '';
-    proc.stdout.on('data', (d) => {
-      out += d;
-      const m = out.match(/on (http:\/\/[^\s]+\/)/);
-      if (m) res(m[1]);
-    });
-    proc.on('exit', (code) => rej(new Error(`server exited (${code}) before listening: ${stderr.trim()}`)));
-    setTimeout(() => rej(new Error('server did not start within 120 s')), 120_000);
-  });
-  return { proc, url };
-}
 
 async function main() {
   const city = join(work, 'city.geojson');
@@ -57,7 +41,7 @@ async function main() {
   const tileOf = new Map();
   sidecar.tiles.forEach((t) => t.objects.forEach((o) => tileOf.set(o, t.uri)));
 
-  const { proc, url } = startServer(['serve', city, join(work, 'city.pvs'), '--tiles', tilesetDir, '--addr', '127.0.0.1:0']);
+  const { proc, url } = startServer(bin, ['serve', city, join(work, 'city.pvs'), '--tiles', tilesetDir, '--addr', '127.0.0.1:0'], { log });
   let browser;
   let failed = false;
   try {

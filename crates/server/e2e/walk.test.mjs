@@ -10,12 +10,12 @@
 //   E2E_METHOD      on-line method (default: dual-ray, the fastest conservative one)
 //   E2E_CELL_SIZE   viewcell size in metres (default: 100)
 //   CHROMIUM        browser executable (default: /usr/bin/chromium)
-import { spawn } from 'node:child_process';
 import { mkdirSync } from 'node:fs';
 import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import assert from 'node:assert/strict';
 import { chromium } from 'playwright-core';
+import { startServer } from './serve.mjs';
 
 const here = dirname(fileURLToPath(import.meta.url));
 const repo = resolve(here, '../../..');
@@ -28,23 +28,9 @@ mkdirSync(outDir, { recursive: true });
 
 function log(...a) { console.log('[e2e]', ...a); }
 
-function startServer() {
+function startWalkServer() {
   const args = ['serve', sceneFile, '--method', method, '--cell-size', String(cellSize), '--addr', '127.0.0.1:0'];
-  log(bin, args.join(' '));
-  const proc = spawn(bin, args, { stdio: ['ignore', 'pipe', 'pipe'] });
-  let stderr = '';
-  proc.stderr.on('data', (d) => { stderr += d; process.stderr.write(d); });
-  const url = new Promise((res, rej) => {
-    let out = '';
-    proc.stdout.on('data', (d) => {
-      out += d;
-      const m = out.match(/on (http:\/\/[^\s]+\/)/);
-      if (m) res(m[1]);
-    });
-    proc.on('exit', (code) => rej(new Error(`server exited (${code}) before listening: ${stderr.trim()}`)));
-    setTimeout(() => rej(new Error('server did not start within 600 s')), 600_000);
-  });
-  return { proc, url };
+  return startServer(bin, args, { log, timeoutMs: 600_000, echoStderr: true });
 }
 
 async function getJson(base, path) {
@@ -55,7 +41,7 @@ async function getJson(base, path) {
 }
 
 async function main() {
-  const { proc, url } = startServer();
+  const { proc, url } = startWalkServer();
   let browser;
   let failed = false;
   try {
