@@ -61,6 +61,35 @@ pub fn raise_fd_limit() -> Option<u64> {
     }
 }
 
+/// Pending connections the kernel keeps for the accept loop (Linux caps it at
+/// `net.core.somaxconn`, 4,096 by default): a burst of a few thousand simultaneous
+/// connects fits, instead of overflowing the 1,024 of `TcpListener::bind` and leaving
+/// clients that the server never sees.
+pub const LISTEN_BACKLOG: u32 = 8192;
+
+/// Listen on `addr` (`host:port`; port 0 picks one) with [`LISTEN_BACKLOG`].
+pub async fn listen(addr: &str) -> std::io::Result<TcpListener> {
+    let mut last = None;
+    for a in tokio::net::lookup_host(addr).await? {
+        let socket = if a.is_ipv4() {
+            tokio::net::TcpSocket::new_v4()?
+        } else {
+            tokio::net::TcpSocket::new_v6()?
+        };
+        socket.set_reuseaddr(true)?;
+        match socket.bind(a).and_then(|()| socket.listen(LISTEN_BACKLOG)) {
+            Ok(l) => return Ok(l),
+            Err(e) => last = Some(e),
+        }
+    }
+    Err(last.unwrap_or_else(|| {
+        std::io::Error::new(
+            std::io::ErrorKind::AddrNotAvailable,
+            format!("{addr}: no address"),
+        )
+    }))
+}
+
 /// The connection cap for `config` under an open-file limit of `fd_limit`: what the
 /// limit leaves once the reserved descriptors and the walk sessions (whose upgraded
 /// connections no longer count against the cap) are set aside.

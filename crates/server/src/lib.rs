@@ -24,7 +24,7 @@
 //! let grid = CellGrid::cover(&scene.bounds, 100.0).unwrap();
 //! let method = sightline_methods::create("erosion", scene.clone(), &Default::default()).unwrap();
 //! let server = Server::new(scene, Arc::new(OnlineSource::new(method, grid)), ServerConfig::default());
-//! let listener = tokio::net::TcpListener::bind("127.0.0.1:8080").await?;
+//! let listener = sightline_server::conn::listen("127.0.0.1:8080").await?;
 //! server.run(listener, async { let _ = tokio::signal::ctrl_c().await; }).await
 //! # }
 //! ```

@@ -45,13 +45,15 @@ async fn get(addr: SocketAddr, path: &str) -> Result<(u16, String, Vec<u8>), Str
     Ok((status, head, buf[split + 4..].to_vec()))
 }
 
-/// Seconds until the server closes a connection that sends `prefix` and then, every
-/// `drip`, one more byte of a header that never ends (`None`: sends nothing at all).
-async fn held_open(addr: SocketAddr, prefix: &'static [u8], drip: Option<Duration>) -> f64 {
-    let t0 = Instant::now();
-    let Ok(mut s) = TcpStream::connect(addr).await else {
-        return 0.0;
-    };
+/// Seconds until the server closes connection `s` (opened at `t0`) that sends `prefix`
+/// and then, every `drip`, one more byte of a header that never ends (`None`: sends
+/// nothing at all).
+async fn held_open(
+    mut s: TcpStream,
+    t0: Instant,
+    prefix: &'static [u8],
+    drip: Option<Duration>,
+) -> f64 {
     let _ = s.write_all(prefix).await;
     let mut buf = [0u8; 256];
     loop {
@@ -97,18 +99,24 @@ async fn burst_of_2000_connections_beside_slow_and_half_open_clients() {
     .await;
     let addr = s.addr;
 
-    let half_open: Vec<_> = (0..HALF_OPEN)
-        .map(|_| tokio::spawn(held_open(addr, b"", None)))
-        .collect();
-    let slow: Vec<_> = (0..SLOW)
-        .map(|_| {
-            tokio::spawn(held_open(
-                addr,
-                b"GET /api/scene HTTP/1.1\r\nHost: x\r\nX-Slow: ",
-                Some(Duration::from_millis(300)),
-            ))
-        })
-        .collect();
+    // The slow and half-open clients are connected (and accepted) before the burst: a
+    // connection the server has not accepted yet is not one it can time out.
+    let mut half_open = vec![];
+    for _ in 0..HALF_OPEN {
+        let c = TcpStream::connect(addr).await.expect("connect");
+        half_open.push(tokio::spawn(held_open(c, Instant::now(), b"", None)));
+    }
+    let mut slow = vec![];
+    for _ in 0..SLOW {
+        let c = TcpStream::connect(addr).await.expect("connect");
+        slow.push(tokio::spawn(held_open(
+            c,
+            Instant::now(),
+            b"GET /api/scene HTTP/1.1\r\nHost: x\r\nX-Slow: ",
+            Some(Duration::from_millis(300)),
+        )));
+    }
+    tokio::time::sleep(Duration::from_millis(200)).await;
 
     // The burst: every client connects at the same moment.
     let start = Arc::new(tokio::sync::Barrier::new(BURST));

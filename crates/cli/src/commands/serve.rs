@@ -94,7 +94,7 @@ pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
         .build()
         .context("cannot start the async runtime")?;
     rt.block_on(async move {
-        let listener = tokio::net::TcpListener::bind(&addr)
+        let listener = sightline_server::conn::listen(&addr)
             .await
             .with_context(|| format!("cannot listen on {addr}"))?;
         let local = listener.local_addr()?;

@@ -103,7 +103,7 @@ pub struct TestServer {
 
 impl TestServer {
     pub async fn start(scene: Arc<Scene>, source: SharedSource, config: ServerConfig) -> Self {
-        let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+        let listener = sightline_server::conn::listen("127.0.0.1:0").await.unwrap();
         let addr = listener.local_addr().unwrap();
         let server = Server::new(scene, source, config);
         let state = server.state().clone();
