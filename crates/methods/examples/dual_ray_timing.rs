@@ -42,8 +42,18 @@ fn peak_rss_kb() -> Option<u64> {
     line.split_whitespace().nth(1)?.parse().ok()
 }
 
-/// Median wall and thread CPU ms per cell of `m` over `cells`, printing each cell.
-fn time_cells(m: &DualRay, cells: &[ViewCell], quiet: bool) -> (f64, f64, Vec<Vec<u32>>) {
+/// Timings of a run over cells.
+struct Timing {
+    /// Median wall and thread CPU ms per cell.
+    ms: f64,
+    cpu: f64,
+    /// Thread CPU ms of the whole run.
+    cpu_total: f64,
+    pvs: Vec<Vec<u32>>,
+}
+
+/// Time `m` over `cells`, printing each cell unless `quiet`.
+fn time_cells(m: &DualRay, cells: &[ViewCell], quiet: bool) -> Timing {
     let mut ms = Vec::new();
     let mut cpu = Vec::new();
     let mut out = Vec::new();
@@ -61,24 +71,12 @@ fn time_cells(m: &DualRay, cells: &[ViewCell], quiet: bool) -> (f64, f64, Vec<Ve
         ms.push(dt);
         out.push(pvs);
     }
-    (median(&ms), median(&cpu), out)
-}
-
-/// Least-squares slope of `ln y` against `ln x`.
-fn loglog_slope(pts: &[(f64, f64)]) -> f64 {
-    let l: Vec<(f64, f64)> = pts
-        .iter()
-        .filter(|(x, y)| *x > 0.0 && *y > 0.0)
-        .map(|(x, y)| (x.ln(), y.ln()))
-        .collect();
-    let n = l.len() as f64;
-    let (mx, my) = (
-        l.iter().map(|p| p.0).sum::<f64>() / n,
-        l.iter().map(|p| p.1).sum::<f64>() / n,
-    );
-    let sxy: f64 = l.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let sxx: f64 = l.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
-    sxy / sxx
+    Timing {
+        ms: median(&ms),
+        cpu: median(&cpu),
+        cpu_total: cpu.iter().sum(),
+        pvs: out,
+    }
 }
 
 /// The `scaling` mode: one metropolis per size up to `max_n`.
@@ -102,7 +100,7 @@ fn scaling(max_n: usize, size: f64, count: usize, res: u32) {
         );
         let prep = t.elapsed().as_secs_f64();
         let cells = crossing_cells(&scene, size, count);
-        let (_, cpu, pvs) = time_cells(&m, &cells, true);
+        let Timing { cpu, pvs, .. } = time_cells(&m, &cells, true);
         let sizes: Vec<f64> = pvs.iter().map(|p| p.len() as f64).collect();
         let pvs_med = median(&sizes);
         let rss = peak_rss_kb().map_or(f64::NAN, |kb| kb as f64 / 1048576.0);
@@ -116,8 +114,8 @@ fn scaling(max_n: usize, size: f64, count: usize, res: u32) {
     if ms_pts.len() >= 2 {
         println!(
             "fitted exponents vs buildings: ms/cell {:.2}, |PVS| {:.2}",
-            loglog_slope(&ms_pts),
-            loglog_slope(&pvs_pts)
+            sightline_stats::loglog_slope(&ms_pts),
+            sightline_stats::loglog_slope(&pvs_pts)
         );
     }
 }
@@ -159,10 +157,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 Planarity::Discrete { resolution_px: res },
             )
             .with_virtual_occluders(true);
-            let (ms_vo, cpu_vo, pvs_vo) = time_cells(&with_vo, &cells, false);
-            let (ms_plain, cpu_plain, pvs_plain) = time_cells(&m, &cells, true);
+            let vo = time_cells(&with_vo, &cells, false);
+            let plain = time_cells(&m, &cells, true);
             let mut sizes = (0usize, 0usize);
-            for ((c, v), p) in cells.iter().zip(&pvs_vo).zip(&pvs_plain) {
+            for ((c, v), p) in cells.iter().zip(&vo.pvs).zip(&plain.pvs) {
                 if let Some(id) = v.iter().find(|id| p.binary_search(id).is_err()) {
                     return Err(format!("{c}: object {id} only with virtual occluders").into());
                 }
@@ -170,11 +168,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 sizes.1 += p.len();
             }
             println!(
-                "{size} m cells at {res}², {} cells: with VOs median {ms_vo:.1} ms (CPU \
-                 {cpu_vo:.1}), PVS total {}; without {ms_plain:.1} ms (CPU {cpu_plain:.1}), \
-                 PVS total {}",
+                "{size} m cells at {res}², {} cells: with VOs median {:.1} ms (CPU {:.1}), PVS \
+                 total {}; without {:.1} ms (CPU {:.1}), PVS total {}",
                 cells.len(),
+                vo.ms,
+                vo.cpu,
                 sizes.0,
+                plain.ms,
+                plain.cpu,
                 sizes.1
             );
         }
@@ -185,30 +186,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 Planarity::Discrete { resolution_px: res },
             )
             .with_virtual_occluders(true);
-            let (ms, cpu, _) = time_cells(&with_vo, &cells, false);
-            println!("{size} m cells at {res}² with VOs: median {ms:.1} ms (CPU {cpu:.1})");
+            let t = time_cells(&with_vo, &cells, false);
+            println!(
+                "{size} m cells at {res}² with VOs: median {:.1} ms (CPU {:.1})",
+                t.ms, t.cpu
+            );
         }
         "cells" => {
-            let mut ms = Vec::new();
-            let mut cpu = Vec::new();
-            for c in &cells {
-                let t = Instant::now();
-                let c0 = thread_cpu_ns();
-                let (pvs, st) = m.pvs_with_stats(c);
-                let dt = t.elapsed().as_secs_f64() * 1e3;
-                if let (Some(a), Some(b)) = (c0, thread_cpu_ns()) {
-                    cpu.push((b - a) as f64 * 1e-6);
-                }
-                println!("{c}: {dt:.1} ms, pvs {}, {st:?}", pvs.len());
-                ms.push(dt);
-            }
+            let t = time_cells(&m, &cells, false);
             println!(
                 "{size} m cells at {res}²: median {:.1} ms/cell over {} cells (single thread; \
                  CPU median {:.1} ms, total {:.0} ms)",
-                median(&ms),
+                t.ms,
                 cells.len(),
-                median(&cpu),
-                cpu.iter().sum::<f64>()
+                t.cpu,
+                t.cpu_total
             );
         }
         "seed" => {

@@ -385,7 +385,7 @@ fn hidden_plain(scratch: &mut Scratch, first: u32, resolution: u32) -> bool {
 #[cfg(test)]
 mod tests {
     use super::super::occluders::Axis;
-    use super::super::plane::{orient, Oriented};
+    use super::super::plane::orient;
     use super::super::{DualRay, Planarity};
     use super::*;
     use sightline_geom::{Aabb3, DVec3};
@@ -410,18 +410,11 @@ mod tests {
             let mut scratch = Scratch::default();
             for (_, b) in &m.tree.items {
                 for axis in [Axis::X, Axis::Y] {
-                    let Some(Oriented {
-                        lo,
-                        lo_top,
-                        hi,
-                        hi_top,
-                        cell_low,
-                    }) = orient(&a, b, axis)
-                    else {
+                    let Some(pair) = orient(&a, b, axis) else {
                         continue; // not separated along this axis
                     };
                     let decomp = m.decomposition(axis);
-                    Planar::build(&mut scratch, decomp, lo, lo_top, hi, hi_top, None, cell_low);
+                    Planar::build(&mut scratch, decomp, &pair, None);
                     for res in [16, 64, 256] {
                         let h = hidden(&mut scratch, res);
                         let plain = hidden_plain(&mut scratch, START_LEVEL, res);

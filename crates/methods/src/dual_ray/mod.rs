@@ -441,35 +441,18 @@ impl DualRay {
             if gap <= 0.0 {
                 continue;
             }
-            let Some(plane::Oriented {
-                lo,
-                lo_top,
-                hi,
-                hi_top,
-                cell_low,
-            }) = plane::orient(a, b, axis)
-            else {
+            let Some(pair) = plane::orient(a, b, axis) else {
                 continue;
             };
             let decomp = self.decomposition(axis);
             // First only the occluders next to the narrower box, where every ray of the
             // shaft converges: they often hide it on their own, at a fraction of the
             // cost (a subset covering is enough).
-            let len = hi.x0 - lo.x1;
+            let len = pair.len();
             let near = (len * FIRST_FRACTION).max(FIRST_MIN_M);
             if near < len {
-                let narrow_lo = lo.y1 - lo.y0 < hi.y1 - hi.y0;
-                let signed = if narrow_lo { near } else { -near };
-                Planar::build(
-                    scratch,
-                    decomp,
-                    lo,
-                    lo_top,
-                    hi,
-                    hi_top,
-                    Some(signed),
-                    cell_low,
-                );
+                let signed = if pair.narrow_lo() { near } else { -near };
+                Planar::build(scratch, decomp, &pair, Some(signed));
                 stats.planar_tests += 1;
                 stats.pieces += scratch.planar.pieces.len() as u64;
                 if witness::visible(scratch, decomp) {
@@ -492,7 +475,7 @@ impl DualRay {
                     }
                 }
             }
-            Planar::build(scratch, decomp, lo, lo_top, hi, hi_top, None, cell_low);
+            Planar::build(scratch, decomp, &pair, None);
             stats.planar_tests += 1;
             stats.pieces += scratch.planar.pieces.len() as u64;
             let hidden = match self.planarity {
@@ -546,22 +529,14 @@ impl DualRay {
         scratch: &mut Scratch,
         stats: &mut TraversalStats,
     ) -> bool {
-        let Some(plane::Oriented {
-            lo,
-            lo_top,
-            hi,
-            hi_top,
-            cell_low,
-        }) = plane::orient(a, b, axis)
-        else {
+        let Some(pair) = plane::orient(a, b, axis) else {
             return false;
         };
-        let len = hi.x0 - lo.x1;
+        let len = pair.len();
         let near = (len * FIRST_FRACTION).max(FIRST_MIN_M);
-        let narrow_lo = lo.y1 - lo.y0 < hi.y1 - hi.y0;
-        let gather = (near < len).then_some(if narrow_lo { near } else { -near });
+        let gather = (near < len).then_some(if pair.narrow_lo() { near } else { -near });
         let decomp = self.decomposition(axis);
-        Planar::build(scratch, decomp, lo, lo_top, hi, hi_top, gather, cell_low);
+        Planar::build(scratch, decomp, &pair, gather);
         stats.planar_tests += 1;
         stats.pieces += scratch.planar.pieces.len() as u64;
         match self.planarity {

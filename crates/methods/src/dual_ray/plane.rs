@@ -292,6 +292,18 @@ pub(crate) struct Oriented {
     pub cell_low: bool,
 }
 
+impl Oriented {
+    /// Length of the shaft between the two faces.
+    pub(crate) fn len(&self) -> f64 {
+        self.hi.x0 - self.lo.x1
+    }
+
+    /// Whether `lo` is the narrower box across the axis.
+    pub(crate) fn narrow_lo(&self) -> bool {
+        self.lo.y1 - self.lo.y0 < self.hi.y1 - self.hi.y0
+    }
+}
+
 /// `a` and `b` ordered along `axis`, or `None` when they are not separated along it.
 pub(crate) fn orient(a: &Aabb3, b: &Aabb3, axis: Axis) -> Option<Oriented> {
     let (ra, rb) = (local_rect(a, axis), local_rect(b, axis));
@@ -317,17 +329,19 @@ impl Planar {
     /// Set up the shaft between `lo` (tops at `lo_top`) and `hi` (`lo.x1 < hi.x0`) and
     /// gather the occluder pieces cut by the ceiling from `decomp`, ordered from the
     /// cell's side (`lo` when `cell_low`) outwards.
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn build(
         scratch: &mut Scratch,
         decomp: &Decomposition,
-        lo: Rect,
-        lo_top: f64,
-        hi: Rect,
-        hi_top: f64,
+        pair: &Oriented,
         near: Option<f64>,
-        cell_low: bool,
     ) {
+        let Oriented {
+            lo,
+            lo_top,
+            hi,
+            hi_top,
+            cell_low,
+        } = *pair;
         let ceiling = Ceiling::new(&lo, lo_top, &hi, hi_top);
         let xa = lo.x1;
         let xb = hi.x0;

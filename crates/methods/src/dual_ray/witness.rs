@@ -90,7 +90,7 @@ fn gather_candidates(scratch: &mut Scratch) {
 #[cfg(test)]
 mod tests {
     use super::super::occluders::Axis;
-    use super::super::plane::{orient, Oriented, Planar, Scratch};
+    use super::super::plane::{orient, Planar, Scratch};
     use super::super::{discrete, exact, DualRay, Planarity};
     use super::*;
     use sightline_geom::{Aabb3, DVec3};
@@ -112,35 +112,19 @@ mod tests {
             );
             for (_, b) in m.tree.items.iter().step_by(3) {
                 for axis in [Axis::X, Axis::Y] {
-                    let Some(Oriented {
-                        lo,
-                        lo_top,
-                        hi,
-                        hi_top,
-                        cell_low,
-                    }) = orient(&a, b, axis)
-                    else {
+                    let Some(pair) = orient(&a, b, axis) else {
                         continue; // not separated along this axis
                     };
                     let decomp = m.decomposition(axis);
-                    let len = hi.x0 - lo.x1;
-                    let near = if cell_low { 0.3 * len } else { -0.3 * len };
-                    Planar::build(
-                        &mut scratch,
-                        decomp,
-                        lo,
-                        lo_top,
-                        hi,
-                        hi_top,
-                        Some(near),
-                        cell_low,
-                    );
+                    let len = pair.len();
+                    let near = if pair.cell_low { 0.3 * len } else { -0.3 * len };
+                    Planar::build(&mut scratch, decomp, &pair, Some(near));
                     tried += 1;
                     if !visible(&mut scratch, decomp) {
                         continue;
                     }
                     witnessed += 1;
-                    Planar::build(&mut scratch, decomp, lo, lo_top, hi, hi_top, None, cell_low);
+                    Planar::build(&mut scratch, decomp, &pair, None);
                     for res in [16, 128] {
                         assert!(!discrete::hidden(&mut scratch, res), "{c:?} {b:?} {res}");
                     }
