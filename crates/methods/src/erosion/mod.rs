@@ -137,6 +137,9 @@ pub struct ErosionMethod {
     field: Arc<HeightField>,
     tops: Vec<Vec<Top>>,
     bins: usize,
+    /// The bin geometry of the full and of the coarse pass (built once).
+    fine: Bins,
+    coarse: Bins,
     /// Eroded occluders per (cell half size in µm, element, fill threshold in dm), with
     /// the tick of their last use (least recently used evicted beyond `CACHE_BYTES`).
     cache: Mutex<(u64, ErodedCache)>,
@@ -229,6 +232,8 @@ impl ErosionMethod {
             field: Arc::new(field),
             tops,
             bins: bins as usize,
+            fine: Bins::new(bins as usize),
+            coarse: Bins::new(bins as usize / COARSE_FACTOR),
             cache: Mutex::new((0, HashMap::new())),
             seed,
             origin,
@@ -499,14 +504,13 @@ impl ErosionMethod {
         undecided: &mut Vec<u32>,
         visible: &mut Vec<u32>,
     ) {
-        let coarse = self.bins / COARSE_FACTOR;
         let mut memo = SampleMemo::new();
-        if coarse < 64 {
+        if self.bins / COARSE_FACTOR < 64 {
             let pass = Pass {
                 seeds: None,
                 memo: &mut memo,
             };
-            self.decide_at(self.bins, cell, rect, undecided, visible, pass);
+            self.decide_at(&self.fine, cell, rect, undecided, visible, pass);
             return;
         }
         let mut maybe = Vec::new();
@@ -514,10 +518,10 @@ impl ErosionMethod {
             seeds: None,
             memo: &mut memo,
         };
-        let coarse_maps = self.decide_at(coarse, cell, rect, undecided, &mut maybe, pass);
+        let coarse_maps = self.decide_at(&self.coarse, cell, rect, undecided, &mut maybe, pass);
         let mut hidden = std::mem::take(undecided);
         self.decide_at(
-            self.bins,
+            &self.fine,
             cell,
             rect,
             &mut maybe,
@@ -537,7 +541,7 @@ impl ErosionMethod {
     /// ([`PolarMap::seeded`]). Returns the maps built.
     fn decide_at(
         &self,
-        bins: usize,
+        bins: &Bins,
         cell: &ViewCell,
         rect: Aabb2,
         undecided: &mut Vec<u32>,
@@ -550,7 +554,7 @@ impl ErosionMethod {
             half: rect.size() * 0.5,
             s: rect.center(),
             z1: cell.max.z,
-            bins: Bins::new(bins),
+            bins: bins.clone(),
             cell_meets_occluders: matches!(self.variant, Variant::Full | Variant::Segment)
                 && self.field.meets_rect(rect),
             fill_dm: self.field.fill_threshold(rect, cell.max.z),

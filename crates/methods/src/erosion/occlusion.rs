@@ -30,6 +30,7 @@ use super::field::DM;
 use super::tiles::Occluders;
 use sightline_geom::{Aabb2, DVec2};
 use std::f64::consts::TAU;
+use std::sync::Arc;
 
 /// Slack in the conservative direction for distance and height comparisons (m).
 const EPS_M: f64 = 1e-6;
@@ -38,13 +39,14 @@ const EPS_M: f64 = 1e-6;
 #[derive(Debug)]
 pub struct ThroughEye;
 
-/// Bin geometry shared by occluders and occludees.
+/// Bin geometry shared by occluders and occludees (cheap to clone: every map of a
+/// cell holds one).
 #[derive(Clone, Debug)]
 pub struct Bins {
     pub n: usize,
     width: f64,
-    dirs: Vec<DVec2>,
-    mids: Vec<DVec2>,
+    dirs: Arc<[DVec2]>,
+    mids: Arc<[DVec2]>,
 }
 
 impl Bins {
@@ -56,10 +58,12 @@ impl Bins {
             width,
             dirs: (0..=n)
                 .map(|k| DVec2::from_angle(k as f64 * width))
-                .collect(),
+                .collect::<Vec<_>>()
+                .into(),
             mids: (0..n)
                 .map(|k| DVec2::from_angle((k as f64 + 0.5) * width))
-                .collect(),
+                .collect::<Vec<_>>()
+                .into(),
         }
     }
 
