@@ -4,7 +4,8 @@
 //! One arithmetic for every grid of sightline: the viewcells of `sightline cells`, the
 //! walkthrough server's cells and the buckets of a `.pvs` file's spatial index. A cell
 //! `(i, j)` spans `origin + (i, j) * step ..= origin + (i + 1, j + 1) * step`, so
-//! neighbouring cells share their sides exactly; a point's cell is
+//! neighbouring cells share their sides exactly ([`UniformGrid::rect`]; or, exactly
+//! `step` wide, [`UniformGrid::rect_from_corner`]); a point's cell is
 //! `floor((p - origin) / step)`, a monotone function of `p`, so a point inside a box
 //! always falls in one of the cells between those of the box's corners, even with
 //! rounding.
@@ -79,13 +80,23 @@ impl UniformGrid {
         Aabb2::new(self.origin, self.max())
     }
 
-    /// The rectangle of cell `(i, j)`.
+    /// The minimum corner of cell `(i, j)`.
+    pub fn corner(&self, i: u32, j: u32) -> DVec2 {
+        self.origin + DVec2::new(i as f64, j as f64) * self.step
+    }
+
+    /// The rectangle of cell `(i, j)`, from its corner to the next cell's: neighbouring
+    /// cells share their sides exactly.
     pub fn rect(&self, i: u32, j: u32) -> Aabb2 {
-        let (i, j) = (i as f64, j as f64);
-        Aabb2::new(
-            self.origin + DVec2::new(i, j) * self.step,
-            self.origin + DVec2::new(i + 1.0, j + 1.0) * self.step,
-        )
+        Aabb2::new(self.corner(i, j), self.corner(i + 1, j + 1))
+    }
+
+    /// The rectangle `corner(i, j) ..= corner(i, j) + step`: exactly `step` wide, while
+    /// its far sides may miss the next cell's near sides by a rounding (the walkthrough
+    /// server's cells and the street cells are these).
+    pub fn rect_from_corner(&self, i: u32, j: u32) -> Aabb2 {
+        let lo = self.corner(i, j);
+        Aabb2::new(lo, lo + self.step)
     }
 
     /// Column and row of the cell containing `p`, clamped to the grid (a point below the
@@ -136,6 +147,8 @@ mod tests {
             if i + 1 < g.nx {
                 assert_eq!(r.max.x, g.rect(i + 1, j).min.x, "shared side");
             }
+            let q = g.rect_from_corner(i, j);
+            assert_eq!((q.min, q.max), (r.min, r.min + g.step));
         }
         assert_eq!(g.coords(483), None);
         assert_eq!(g.cell_of(g.max()), (22, 20));

@@ -129,7 +129,8 @@ impl CellGrid {
     pub fn cell(&self, id: CellId) -> Option<ViewCell> {
         let squares = self.squares();
         let (ix, iy) = squares.coords(id)?;
-        ViewCell::from_rect(squares.rect(ix, iy), self.z_range_m[0], self.z_range_m[1]).ok()
+        let r = squares.rect_from_corner(ix, iy);
+        ViewCell::from_rect(r, self.z_range_m[0], self.z_range_m[1]).ok()
     }
 
     /// The (up to) 8 cells adjacent to `id`, ordered so that those lying ahead along
@@ -169,7 +170,7 @@ impl CellGrid {
         let id = self.locate(DVec3::new(p.x, p.y, self.z_range_m[0])).ok()?;
         let squares = self.squares();
         let (ix, iy) = squares.coords(id)?;
-        let r = squares.rect(ix, iy);
+        let r = squares.rect_from_corner(ix, iy);
         // Distance along the ray to the side crossed in x and in y.
         let t = |pc: f64, lo: f64, hi: f64, hc: f64| {
             if hc > 0.0 {

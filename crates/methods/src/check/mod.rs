@@ -50,7 +50,7 @@ pub use truth::{ground_truth, Truth, TruthOptions, TruthScene, Witness, INSET_M}
 use crate::{MethodError, VisibilityMethod};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use sightline_geom::{Aabb2, DVec2, UniformGrid, ViewCell};
+use sightline_geom::{DVec2, UniformGrid, ViewCell};
 use sightline_scene::Scene;
 use std::time::Instant;
 
@@ -259,10 +259,8 @@ pub fn street_cells(
     let free: Vec<ViewCell> = (0..grid.len() as u32)
         .filter_map(|id| {
             let (i, j) = grid.coords(id)?;
-            // Each cell spans `lo ..= lo + size_m` and is probed every `size_m / 4`.
-            let lo = grid.rect(i, j).min;
-            let rect = Aabb2::new(lo, lo + DVec2::splat(size_m));
-            let cell = ViewCell::from_rect(rect, z.0, z.1).ok()?;
+            // Exactly `size_m` wide, probed every `size_m / 4`.
+            let cell = ViewCell::from_rect(grid.rect_from_corner(i, j), z.0, z.1).ok()?;
             is_clear(&ts, &cell, DVec2::splat(size_m), clearance).then_some(cell)
         })
         .collect();
