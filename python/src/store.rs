@@ -227,6 +227,7 @@ pub fn check(
                             AUTO_CELL_M,
                             (1.5, 2.0),
                             k,
+                            sightline_methods::check::Clearance::Box,
                         ))
                     })?;
                     if c.is_empty() {

@@ -1,6 +1,6 @@
 //! Viewcells: axis-aligned boxes a viewer can stand in.
 
-use crate::aabb::Aabb3;
+use crate::aabb::{Aabb2, Aabb3};
 use glam::DVec3;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use std::fmt;
@@ -50,6 +50,11 @@ impl ViewCell {
             min: DVec3::new(a[0], a[1], a[2]),
             max: DVec3::new(a[3], a[4], a[5]),
         })
+    }
+
+    /// The box `rect × [z0, z1]`.
+    pub fn from_rect(rect: Aabb2, z0: f64, z1: f64) -> Result<Self, ParseBoxError> {
+        Self::from_array([rect.min.x, rect.min.y, z0, rect.max.x, rect.max.y, z1])
     }
 
     pub fn to_array(&self) -> [f64; 6] {

@@ -17,11 +17,13 @@
 pub mod aabb;
 pub mod boolean;
 pub mod cell;
+pub mod grid;
 pub mod polygon;
 pub mod predicates;
 
 pub use aabb::{Aabb2, Aabb3};
 pub use cell::{ParseBoxError, ViewCell};
 pub use glam::{DVec2, DVec3};
+pub use grid::UniformGrid;
 pub use polygon::{Polygon, Ring};
 pub use predicates::{orient2d, Orientation};

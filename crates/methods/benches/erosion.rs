@@ -4,7 +4,8 @@
 //! `cargo bench -p sightline-methods --bench erosion`
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use sightline_geom::{DVec2, Polygon, ViewCell};
+use sightline_geom::{DVec2, Polygon};
+use sightline_methods::check::{street_cells, Clearance};
 use sightline_methods::{create, MethodOptions};
 use sightline_scene::{Object, Scene};
 use std::hint::black_box;
@@ -42,18 +43,13 @@ fn grid_city(n: usize) -> Scene {
     Scene::from_objects(objs)
 }
 
-fn street_cell(n: usize, size: f64, k: usize) -> ViewCell {
-    // In the vertical street after block column k % n, row k / n.
-    let x = (k % n) as f64 * 54.0 + 40.0 + 7.0 - size / 2.0;
-    let y = ((k / n) % n) as f64 * 54.0 + 10.0;
-    ViewCell::from_array([x, y, 1.5, x + size, y + size, 2.0]).expect("cell")
-}
-
 fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("erosion");
     g.sample_size(10);
     // ~500 buildings, 50 m cells (paper: 458 buildings, 0.5 s per cell).
     let scene = Arc::new(grid_city(11));
+    // 50 m cells are wider than the 14 m streets: those centred in a street.
+    let cells = street_cells(&scene, 50.0, (1.5, 2.0), usize::MAX, Clearance::Centre);
     for m in [
         "erosion",
         "erosion-segment",
@@ -62,12 +58,12 @@ fn bench(c: &mut Criterion) {
     ] {
         let method = create(m, scene.clone(), &MethodOptions::default()).expect("method");
         // Warm the per-shape erosion cache (precomputed once per cell shape, §5.1).
-        method.pvs(&street_cell(11, 50.0, 0)).expect("pvs");
+        method.pvs(&cells[0]).expect("pvs");
         let mut k = 0;
         g.bench_function(format!("{m}/city484/50m"), |b| {
             b.iter(|| {
                 k += 1;
-                black_box(method.pvs(&street_cell(11, 50.0, k)).expect("pvs"))
+                black_box(method.pvs(&cells[k % cells.len()]).expect("pvs"))
             })
         });
     }

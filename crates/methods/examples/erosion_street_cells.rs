@@ -9,7 +9,7 @@
 //! spread evenly over those nearest the scene's middle, in a deterministic order.
 
 use sightline_geom::ViewCell;
-use sightline_methods::check::street_cells;
+use sightline_methods::check::{near_middle, street_cells, Clearance};
 use sightline_scene::import::{load, ImportOptions};
 use sightline_scene::Scene;
 
@@ -24,7 +24,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut all: Vec<ViewCell> = Vec::new();
     for (dx, dy) in [(0.0, 0.0), (0.5, 0.0), (0.0, 0.5), (0.5, 0.5)] {
         let shifted = shift_bounds(&scene, dx * size, dy * size);
-        for c in street_cells(&shifted, size, (1.5, 2.0), usize::MAX) {
+        for c in street_cells(&shifted, size, (1.5, 2.0), usize::MAX, Clearance::Box) {
             // Keep a cell only if it overlaps none already kept.
             let overlaps = all.iter().any(|k| {
                 k.min.x < c.max.x && c.min.x < k.max.x && k.min.y < c.max.y && c.min.y < k.max.y
@@ -35,22 +35,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     eprintln!("{} free {size} m street cells in {path}", all.len());
-    // As the bench's picker: prefer cells near the middle of the scene (cells at its
-    // edges see mostly empty ground), then spread evenly over the nearest 4 × COUNT.
-    let c = scene.bounds.center().truncate();
-    all.sort_by(|a, b| {
-        let (da, db) = (
-            a.center().truncate().distance(c),
-            b.center().truncate().distance(c),
-        );
-        da.total_cmp(&db)
-    });
-    let pool = &all[..all.len().min(4 * count)];
-    let mut picked: Vec<ViewCell> = if pool.len() <= count {
-        pool.to_vec()
-    } else {
-        (0..count).map(|i| pool[i * pool.len() / count]).collect()
-    };
+    // As the bench's picker: prefer cells near the middle of the scene, then spread evenly
+    // over the nearest 4 × COUNT.
+    let mut picked = near_middle(&scene, &all, count, 4);
     picked.sort_by(|a, b| {
         (a.min.y, a.min.x)
             .partial_cmp(&(b.min.y, b.min.x))

@@ -1,13 +1,15 @@
 //! Phase timings of the erosion methods on a scene: `cargo run --release -p
 //! sightline-methods --example erosion_timing -- SCENE [CELL_SIZE] [CELLS] [METHODS]`
-//! (METHODS: comma-separated, default all five; CELLS may be a cells.json of
+//! (METHODS: comma-separated, default all five; CELLS is a number of street cells whose
+//! centre column is free, `check::street_cells`, or a cells.json of
 //! `erosion_street_cells`). With `EROSION_WARM=1` every cell is run once before the
 //! timed run, so that the eroded occluders of every cell shape and fill threshold are
 //! cached (§5.1: a preprocessing shared by all cells of a grid) and the times are
 //! those of the per-cell tests alone. `EROSION_REPEAT=N` times every cell N times (for
 //! profiles of the per-cell tests); `EROSION_BINS=N` sets the number of azimuth bins.
 
-use sightline_geom::{DVec2, ViewCell};
+use sightline_geom::ViewCell;
+use sightline_methods::check::{street_cells, Clearance};
 use sightline_methods::{create, MethodOptions};
 use sightline_scene::import::{load, ImportOptions};
 use std::sync::Arc;
@@ -27,11 +29,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         t.elapsed().as_secs_f64(),
         scene.objects.len()
     );
-    let b = scene.bounds;
-    let c = (b.min.truncate() + b.max.truncate()) * 0.5;
-    let mut cells = Vec::new();
-    let count: usize = if cells_arg.ends_with(".json") {
+    let cells = if cells_arg.ends_with(".json") {
         // A JSON array of `[x0, y0, z0, x1, y1, z1]` rows, one per line.
+        let mut cells = Vec::new();
         for line in std::fs::read_to_string(cells_arg)?.lines() {
             let t = line.trim().trim_end_matches(',');
             if !t.starts_with("[[") && t.starts_with('[') && t.ends_with(']') {
@@ -43,30 +43,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 cells.push(ViewCell::from_array(a)?);
             }
         }
-        cells.len()
+        cells
     } else {
-        cells_arg.parse()?
+        street_cells(
+            &scene,
+            size,
+            (1.5, 2.0),
+            cells_arg.parse()?,
+            Clearance::Centre,
+        )
     };
-    let mut k = 0i64;
-    while cells.len() < count && k < 10_000 {
-        let (i, j) = ((k * 7919) % 41 - 20, (k * 104_729) % 41 - 20);
-        k += 1;
-        let p = c + DVec2::new(i as f64, j as f64) * 23.0;
-        let free = !scene
-            .objects
-            .iter()
-            .any(|o| o.inner.iter().any(|pr| pr.footprint.contains(p)));
-        if free {
-            cells.push(ViewCell::from_array([
-                p.x - size / 2.0,
-                p.y - size / 2.0,
-                1.5,
-                p.x + size / 2.0,
-                p.y + size / 2.0,
-                2.0,
-            ])?);
-        }
-    }
     let only: Vec<String> = args
         .get(4)
         .map(|s| s.split(',').map(String::from).collect())

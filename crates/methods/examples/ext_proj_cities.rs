@@ -15,7 +15,7 @@
 //! or the fraction of its pixels covered by nearer occluders (≥ 90 %: a near miss).
 
 use sightline_geom::ViewCell;
-use sightline_methods::check::{ground_truth, street_cells, TruthOptions};
+use sightline_methods::check::{ground_truth, street_cells, Clearance, TruthOptions};
 use sightline_methods::ext_proj::occludee_projection;
 use sightline_methods::ext_proj::{depth_down, pixel_range};
 use sightline_methods::ext_proj::{ExtProj, Params};
@@ -88,7 +88,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .cloned()
         .unwrap_or_else(|| format!("/tmp/ext_proj_cities_{stem}_{size}_{count}.txt"));
     let scene = Arc::new(load(std::path::Path::new(path), &ImportOptions::default())?);
-    let cells: Vec<ViewCell> = street_cells(&scene, size, (1.5, 2.0), count);
+    let cells: Vec<ViewCell> = street_cells(&scene, size, (1.5, 2.0), count, Clearance::Box);
     let n_obj = scene.objects.len();
     eprintln!("{stem}: {n_obj} objects, {} cells of {size} m", cells.len());
     let truth = match read_cache(&cache, cells.len()) {

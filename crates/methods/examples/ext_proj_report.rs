@@ -1,51 +1,19 @@
 //! Figures for the ext-proj report (run in release):
 //! `cargo run --release -p sightline-methods --example ext_proj_report -- SCENE.geojson [cells]`
 //!
-//! Street cells are picked on a grid over the scene (10 m, eye height 1.5–2 m, free of
-//! blocks at their centre); prints ext-proj vs erosion (time, PVS), the resolution
+//! Street cells are picked on a grid over the scene (`check::street_cells`: 10 m, eye
+//! height 1.5–2 m, free of blocks at their centre); prints ext-proj vs erosion (time, PVS), the resolution
 //! curve (Fig. 12) and the improved-projection gain. With `forest` instead of a path
 //! it builds a synthetic forest and prints plain vs sweep with 1, 5, 15 planes.
 
 use sightline_geom::{DVec2, DVec3, Polygon, ViewCell};
+use sightline_methods::check::{street_cells, Clearance};
 use sightline_methods::ext_proj::experiments::{improved_gain, resolution_curve, run, sweep_curve};
 use sightline_methods::ext_proj::Params;
 use sightline_methods::{create, MethodOptions};
 use sightline_scene::{import, Mesh, Object, Prism, Scene};
 use std::sync::Arc;
 use std::time::Instant;
-
-fn street_cells(scene: &Scene, want: usize) -> Vec<ViewCell> {
-    let b = scene.bounds;
-    let inside = |p: DVec2| {
-        scene
-            .objects
-            .iter()
-            .any(|o| o.inner.iter().any(|pr| pr.footprint.contains(p)))
-    };
-    let mut out = Vec::new();
-    let step = ((b.size().x * b.size().y) / (want as f64 * 8.0))
-        .sqrt()
-        .max(10.0);
-    let mut y = b.min.y + step * 0.5;
-    while y < b.max.y {
-        let mut x = b.min.x + step * 0.5;
-        while x < b.max.x {
-            let c = DVec2::new(x, y);
-            if !inside(c) && out.len() < want * 8 {
-                if let Ok(cell) = ViewCell::new(
-                    DVec3::new(x - 5.0, y - 5.0, 1.5),
-                    DVec3::new(x + 5.0, y + 5.0, 2.0),
-                ) {
-                    out.push(cell);
-                }
-            }
-            x += step;
-        }
-        y += step;
-    }
-    let k = (out.len() / want.max(1)).max(1);
-    out.into_iter().step_by(k).take(want).collect()
-}
 
 fn forest(n: usize, leaves: usize) -> Scene {
     let mut s = 0x2545_f491_4f6c_dd1du64;
@@ -141,7 +109,7 @@ fn main() {
             std::process::exit(1);
         }
     };
-    let cells = street_cells(&scene, want);
+    let cells = street_cells(&scene, 10.0, (1.5, 2.0), want, Clearance::Centre);
     println!(
         "{}: {} objects, {} cells, loaded in {:.0} ms",
         what,

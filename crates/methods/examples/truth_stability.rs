@@ -12,8 +12,8 @@
 //! The change of a variant is `|VS_base Δ VS_variant| / |VS_base|` (symmetric
 //! difference, so an object gained and one lost count twice).
 
-use sightline_geom::{DVec2, ViewCell};
-use sightline_methods::check::{TruthOptions, TruthScene};
+use sightline_geom::ViewCell;
+use sightline_methods::check::{street_cells_among, Clearance, TruthOptions, TruthScene};
 use sightline_scene::import::{load, ImportOptions};
 use std::time::Instant;
 
@@ -92,26 +92,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .chunks_exact(6)
         .map(|c| [c[0], c[1], c[2], c[3], c[4], c[5]])
         .collect();
-    let free: Vec<ViewCell> = all
+    let boxes: Vec<ViewCell> = all
         .iter()
         .filter_map(|a| ViewCell::from_array(*a).ok())
-        .filter(|c| {
-            let s = c.max - c.min;
-            (0..5).all(|u| {
-                (0..5).all(|v| {
-                    let p = c.min.truncate() + DVec2::new(u as f64 * s.x, v as f64 * s.y) / 4.0;
-                    ts.is_free(p.extend(c.min.z)) && ts.is_free(p.extend(c.max.z))
-                })
-            })
-        })
         .collect();
-    let cells: Vec<ViewCell> = if free.len() <= count {
-        free.clone()
-    } else {
-        (0..count)
-            .map(|i| free[i * free.len() / count + free.len() / (2 * count)])
-            .collect()
-    };
+    let free = street_cells_among(&ts, &boxes, usize::MAX, Clearance::Box);
+    // `count` of them, spread evenly.
+    let cells = street_cells_among(&ts, &free, count, Clearance::Box);
     let variants = [
         ("2× samples", {
             let mut o = base.clone();

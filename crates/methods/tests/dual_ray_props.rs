@@ -11,6 +11,7 @@ use sightline_geom::{DVec2, DVec3, Polygon, ViewCell};
 use sightline_methods::dual_ray::{DualRay, Planarity};
 use sightline_methods::{create, MethodOptions};
 use sightline_scene::{Object, Scene};
+use std::ops::Range;
 use std::sync::Arc;
 
 #[derive(Clone, Debug)]
@@ -101,14 +102,10 @@ fn brute_visible(boxes: &[Bx], cell: &ViewCell) -> Vec<u32> {
     vis
 }
 
-fn city() -> impl Strategy<Value = (Vec<Bx>, ViewCell)> {
-    // Buildings on a 5 m grid, so many of them touch (party walls) or overlap.
-    let building =
-        (0i32..24, 0i32..24, 1i32..5, 1i32..5, 2u32..30).prop_map(|(x, y, w, d, h)| Bx {
-            min: DVec3::new(x as f64 * 5.0, y as f64 * 5.0, 0.0),
-            max: DVec3::new((x + w) as f64 * 5.0, (y + d) as f64 * 5.0, h as f64),
-        });
-    let cell = (0i32..100, 0i32..100, 2i32..25).prop_map(|(x, y, s)| {
+/// Square eye-height cells of side `sides` m, their low corner at `(x + 0.3, y + 0.6)` for
+/// whole `x`, `y` in `0..extent` (off the buildings' grid).
+fn square_cell(extent: i32, sides: Range<i32>) -> impl Strategy<Value = ViewCell> {
+    (0..extent, 0..extent, sides).prop_map(|(x, y, s)| {
         ViewCell::from_array([
             x as f64 + 0.3,
             y as f64 + 0.6,
@@ -118,8 +115,20 @@ fn city() -> impl Strategy<Value = (Vec<Bx>, ViewCell)> {
             2.0,
         ])
         .expect("valid cell")
-    });
-    (prop::collection::vec(building, 4..16), cell)
+    })
+}
+
+fn city() -> impl Strategy<Value = (Vec<Bx>, ViewCell)> {
+    // Buildings on a 5 m grid, so many of them touch (party walls) or overlap.
+    let building =
+        (0i32..24, 0i32..24, 1i32..5, 1i32..5, 2u32..30).prop_map(|(x, y, w, d, h)| Bx {
+            min: DVec3::new(x as f64 * 5.0, y as f64 * 5.0, 0.0),
+            max: DVec3::new((x + w) as f64 * 5.0, (y + d) as f64 * 5.0, h as f64),
+        });
+    (
+        prop::collection::vec(building, 4..16),
+        square_cell(100, 2..25),
+    )
 }
 
 /// A wider city of long walls and blocks (up to 400 m) and larger cells, cut into
@@ -140,18 +149,10 @@ fn wide_city() -> impl Strategy<Value = (Vec<Bx>, ViewCell)> {
                 max: DVec3::new((x + w) as f64 * 10.0, (y + d) as f64 * 10.0, h as f64),
             }
         });
-    let cell = (0i32..300, 0i32..300, 5i32..60).prop_map(|(x, y, s)| {
-        ViewCell::from_array([
-            x as f64 + 0.3,
-            y as f64 + 0.6,
-            1.5,
-            x as f64 + 0.3 + s as f64,
-            y as f64 + 0.6 + s as f64,
-            2.0,
-        ])
-        .expect("valid cell")
-    });
-    (prop::collection::vec(building, 8..18), cell)
+    (
+        prop::collection::vec(building, 8..18),
+        square_cell(300, 5..60),
+    )
 }
 
 fn scene_of(boxes: &[Bx]) -> Arc<Scene> {

@@ -2,10 +2,9 @@
 //! BD TOPO, Den Haag tile 01): the discretized PVS contains the exact one, every cell
 //! keeps the objects around it, and the methods cull something.
 
-use sightline_geom::{DVec2, ViewCell};
+use sightline_methods::check::{near_middle, street_cells, Clearance};
 use sightline_methods::dual_ray::{DualRay, Planarity};
 use sightline_scene::import::{load, ImportOptions};
-use sightline_scene::Scene;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -13,42 +12,6 @@ fn data(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../../data")
         .join(name)
-}
-
-/// A few cells of `size` whose centre is not inside any footprint, spread over the scene.
-pub fn street_cells(scene: &Scene, size: f64, n: usize) -> Vec<ViewCell> {
-    let b = scene.bounds;
-    let mut out = Vec::new();
-    let mut k: u64 = 12345;
-    let mut tries = 0;
-    while out.len() < n && tries < 10_000 {
-        tries += 1;
-        k = k
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let fx = ((k >> 11) as f64) / ((1u64 << 53) as f64);
-        k = k
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let fy = ((k >> 11) as f64) / ((1u64 << 53) as f64);
-        let c = DVec2::new(
-            b.min.x + (0.2 + 0.6 * fx) * (b.max.x - b.min.x),
-            b.min.y + (0.2 + 0.6 * fy) * (b.max.y - b.min.y),
-        );
-        let inside = scene.objects.iter().any(|o| {
-            o.inner
-                .iter()
-                .any(|p| p.footprint.bbox().contains(c) && p.footprint.contains(c))
-        });
-        if inside {
-            continue;
-        }
-        let h = size / 2.0;
-        if let Ok(cell) = ViewCell::from_array([c.x - h, c.y - h, 1.5, c.x + h, c.y + h, 2.0]) {
-            out.push(cell);
-        }
-    }
-    out
 }
 
 fn check_scene(name: &str, cells: usize) {
@@ -72,7 +35,8 @@ fn check_scene(name: &str, cells: usize) {
     )
     .with_seed(false);
     let (mut culled, mut seeded) = (0usize, 0usize);
-    for c in street_cells(&scene, 20.0, cells) {
+    let street = street_cells(&scene, 20.0, (1.5, 2.0), usize::MAX, Clearance::Centre);
+    for c in near_middle(&scene, &street, cells, 50) {
         let e = exact.pvs_with_stats(&c).0;
         // The seed rays report only exact-PVS objects and change no PVS.
         let seed = fine.seed_objects(&c);

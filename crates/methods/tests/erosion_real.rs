@@ -6,7 +6,8 @@
 mod erosion_support;
 
 use erosion_support::*;
-use sightline_geom::{Aabb2, DVec2, ViewCell};
+use sightline_geom::{Aabb2, ViewCell};
+use sightline_methods::check::{near_middle, street_cells, Clearance};
 use sightline_methods::erosion::{ErosionMethod, Variant};
 use sightline_methods::{create, MethodOptions, VisibilityMethod};
 use sightline_scene::import::{load, ImportOptions};
@@ -18,37 +19,6 @@ fn data(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../../data")
         .join(name)
-}
-
-/// Street cells: cells of `size` on a coarse grid around the scene centre whose
-/// centre column is free.
-fn street_cells(scene: &Scene, size: f64, count: usize) -> Vec<ViewCell> {
-    let b = scene.bounds;
-    let c = (b.min.truncate() + b.max.truncate()) * 0.5;
-    let mut out = Vec::new();
-    let mut k = 0i32;
-    while out.len() < count && k < 400 {
-        let (i, j) = ((k * 7919) % 21 - 10, (k * 104_729) % 21 - 10);
-        k += 1;
-        let p = c + DVec2::new(i as f64, j as f64) * 37.0;
-        let free = !scene
-            .objects
-            .iter()
-            .any(|o| o.inner.iter().any(|pr| pr.footprint.contains(p)));
-        if free {
-            let cell = ViewCell::from_array([
-                p.x - size / 2.0,
-                p.y - size / 2.0,
-                1.5,
-                p.x + size / 2.0,
-                p.y + size / 2.0,
-                2.0,
-            ])
-            .expect("cell");
-            out.push(cell);
-        }
-    }
-    out
 }
 
 /// The scene restricted to objects whose footprint lies within `r` of the cell:
@@ -68,7 +38,8 @@ fn near(scene: &Scene, cell: &ViewCell, r: f64) -> (Scene, Vec<u32>) {
 
 fn check_scene(file: &str) {
     let scene = Arc::new(load(&data(file), &ImportOptions::default()).expect("load scene"));
-    for cell in street_cells(&scene, 20.0, 3) {
+    let street = street_cells(&scene, 20.0, (1.5, 2.0), usize::MAX, Clearance::Centre);
+    for cell in near_middle(&scene, &street, 3, 50) {
         let (sub, ids) = near(&scene, &cell, 50.0);
         let sub = Arc::new(sub);
         let vs = sampled_visible(&sub, &cell, 3);

@@ -7,6 +7,7 @@ mod erosion_support;
 use erosion_support::*;
 use proptest::prelude::*;
 use sightline_geom::{Aabb2, DVec2, ViewCell};
+use sightline_methods::check::{near_middle, street_cells, Clearance};
 use sightline_methods::erosion::{ErosionMethod, Variant};
 use sightline_methods::{MethodOptions, VisibilityMethod};
 use sightline_scene::import::{load, ImportOptions};
@@ -112,37 +113,25 @@ fn data(name: &str) -> PathBuf {
         .join(name)
 }
 
-/// Street cells of `size` around the scene centre whose centre column is free, and
-/// the scene cut to the objects within `r` of each (a few tiles around the cell).
+/// Two street cells of `size` whose centre column is free, and the scene cut to the
+/// objects within `r` of each (a few tiles around the cell).
 fn real_cells(file: &str, size: f64, r: f64) -> Vec<(Arc<Scene>, ViewCell)> {
     let scene = load(&data(file), &ImportOptions::default()).expect("load scene");
-    let c = scene.bounds.center().truncate();
-    let mut out = Vec::new();
-    let mut k = 0i32;
-    while out.len() < 2 && k < 400 {
-        let (i, j) = ((k * 7919) % 21 - 10, (k * 104_729) % 21 - 10);
-        k += 1;
-        let p = c + DVec2::new(i as f64, j as f64) * 37.0;
-        let free = !scene
-            .objects
-            .iter()
-            .any(|o| o.inner.iter().any(|pr| pr.footprint.contains(p)));
-        if !free {
-            continue;
-        }
-        let h = size / 2.0;
-        let cell =
-            ViewCell::from_array([p.x - h, p.y - h, 1.5, p.x + h, p.y + h, 2.0]).expect("cell");
-        let near = Aabb2::new(p - DVec2::splat(r), p + DVec2::splat(r));
-        let objs = scene
-            .objects
-            .iter()
-            .filter(|o| o.bounds.xy().intersects(&near))
-            .cloned()
-            .collect();
-        out.push((Arc::new(Scene::from_objects(objs)), cell));
-    }
-    out
+    let street = street_cells(&scene, size, (1.5, 2.0), usize::MAX, Clearance::Centre);
+    near_middle(&scene, &street, 2, 50)
+        .into_iter()
+        .map(|cell| {
+            let p = cell.center().truncate();
+            let near = Aabb2::new(p - DVec2::splat(r), p + DVec2::splat(r));
+            let objs = scene
+                .objects
+                .iter()
+                .filter(|o| o.bounds.xy().intersects(&near))
+                .cloned()
+                .collect();
+            (Arc::new(Scene::from_objects(objs)), cell)
+        })
+        .collect()
 }
 
 fn check_real(file: &str) {

@@ -2,13 +2,14 @@
 //! bucket listing the cells whose (closed) box meets it. A point query looks at one
 //! bucket and tests the few cells listed there.
 //!
-//! Bucket coordinates are `floor((x - origin) / step)`, a monotone function of `x`, so a
-//! point inside a box always falls in one of the buckets the box was inserted in, even
-//! with rounding.
+//! The buckets are a [`UniformGrid`]: a point's bucket is `floor((p - origin) / step)`,
+//! a monotone function of `p`, so a point inside a box always falls in one of the
+//! buckets the box was inserted in, even with rounding. The cells themselves need not
+//! form a grid: any boxes, overlapping or sparse, are indexed.
 
 use crate::error::PvsError;
 use serde::{Deserialize, Serialize};
-use sightline_geom::{DVec3, ViewCell};
+use sightline_geom::{DVec2, DVec3, UniformGrid, ViewCell};
 
 /// At most this many buckets per cell (keeps the index small for odd cell layouts).
 const MAX_BUCKETS_PER_CELL: usize = 4;
@@ -16,11 +17,9 @@ const MAX_BUCKETS_PER_CELL: usize = 4;
 /// A uniform grid of buckets in compressed-row form.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Grid {
-    pub origin: [f64; 2],
-    pub step: [f64; 2],
-    pub nx: u32,
-    pub ny: u32,
-    /// `nx * ny + 1` offsets into `items`, row-major (`y * nx + x`).
+    /// The buckets over the cells' footprints.
+    pub buckets: UniformGrid,
+    /// `nx * ny + 1` offsets into `items`, by bucket id (row-major, `y * nx + x`).
     pub offsets: Vec<u32>,
     /// Cell indices, ascending within each bucket.
     pub items: Vec<u32>,
@@ -31,10 +30,7 @@ impl Grid {
     pub fn build(cells: &[ViewCell]) -> Grid {
         if cells.is_empty() {
             return Grid {
-                origin: [0.0, 0.0],
-                step: [1.0, 1.0],
-                nx: 1,
-                ny: 1,
+                buckets: UniformGrid::square(DVec2::ZERO, 1.0, 1, 1),
                 offsets: vec![0, 0],
                 items: vec![],
             };
@@ -61,45 +57,32 @@ impl Grid {
         let nx = ((x1 - x0) / sx).floor() as u32 + 1;
         let ny = ((y1 - y0) / sy).floor() as u32 + 1;
         let mut grid = Grid {
-            origin: [x0, y0],
-            step: [sx, sy],
-            nx,
-            ny,
+            buckets: UniformGrid {
+                origin: DVec2::new(x0, y0),
+                step: DVec2::new(sx, sy),
+                nx,
+                ny,
+            },
             offsets: vec![],
             items: vec![],
         };
-        let mut buckets: Vec<Vec<u32>> = vec![Vec::new(); (nx * ny) as usize];
+        let g = grid.buckets;
+        let mut lists: Vec<Vec<u32>> = vec![Vec::new(); g.len()];
         for (i, c) in cells.iter().enumerate() {
-            let (bx0, by0) = grid.bucket_of(c.min.x, c.min.y);
-            let (bx1, by1) = grid.bucket_of(c.max.x, c.max.y);
+            let (bx0, by0) = g.cell_of(c.min.truncate());
+            let (bx1, by1) = g.cell_of(c.max.truncate());
             for by in by0..=by1 {
                 for bx in bx0..=bx1 {
-                    buckets[(by * nx + bx) as usize].push(i as u32);
+                    lists[g.id(bx, by) as usize].push(i as u32);
                 }
             }
         }
         grid.offsets.push(0);
-        for b in buckets {
+        for b in lists {
             grid.items.extend(b);
             grid.offsets.push(grid.items.len() as u32);
         }
         grid
-    }
-
-    /// Bucket coordinates of a point, clamped to the grid.
-    fn bucket_of(&self, x: f64, y: f64) -> (u32, u32) {
-        let f = |v: f64, o: f64, s: f64, n: u32| {
-            let b = ((v - o) / s).floor();
-            if b.is_nan() || b < 0.0 {
-                0
-            } else {
-                (b as u64).min(n as u64 - 1) as u32
-            }
-        };
-        (
-            f(x, self.origin[0], self.step[0], self.nx),
-            f(y, self.origin[1], self.step[1], self.ny),
-        )
     }
 
     /// The lowest-index cell whose closed box contains `p`.
@@ -107,8 +90,8 @@ impl Grid {
         if !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()) {
             return None;
         }
-        let (bx, by) = self.bucket_of(p.x, p.y);
-        let b = (by * self.nx + bx) as usize;
+        let (bx, by) = self.buckets.cell_of(p.truncate());
+        let b = self.buckets.id(bx, by) as usize;
         let (s, e) = (self.offsets[b] as usize, self.offsets[b + 1] as usize);
         self.items[s..e]
             .iter()
@@ -119,12 +102,13 @@ impl Grid {
     /// Check a decoded grid against the cell count (untrusted input).
     pub fn validate(&self, cell_count: usize) -> Result<(), PvsError> {
         let bad = |m: &str| Err(PvsError::Corrupt(format!("spatial index: {m}")));
-        let all_finite = self.origin.iter().chain(&self.step).all(|v| v.is_finite());
-        if !all_finite || self.step.iter().any(|&s| s <= 0.0) {
+        let g = &self.buckets;
+        let all_finite = g.origin.is_finite() && g.step.is_finite();
+        if !all_finite || g.step.x <= 0.0 || g.step.y <= 0.0 {
             return bad("bad origin or step");
         }
-        let n = (self.nx as u64) * (self.ny as u64);
-        if self.nx == 0 || self.ny == 0 || self.offsets.len() as u64 != n + 1 {
+        let n = (g.nx as u64) * (g.ny as u64);
+        if g.nx == 0 || g.ny == 0 || self.offsets.len() as u64 != n + 1 {
             return bad("bucket count does not match the grid size");
         }
         if self.offsets[0] != 0

@@ -25,7 +25,7 @@
 use crate::index::SceneIndex;
 use crate::{Prism, Scene};
 use rayon::prelude::*;
-use sightline_geom::{boolean, Aabb2, Aabb3, DVec2, Polygon, ViewCell};
+use sightline_geom::{boolean, grid, Aabb2, Aabb3, DVec2, Polygon, UniformGrid, ViewCell};
 
 /// Grids larger than this are refused (they would not fit a `.pvs` anyway).
 pub const MAX_CELLS: u64 = 20_000_000;
@@ -50,8 +50,8 @@ pub fn grid_shape(scene: &Scene, size_m: f64) -> (u64, u64) {
         return (0, 0);
     }
     let o = grid_origin(b, size_m);
-    let count = |extent: f64| ((extent / size_m).ceil() as u64).max(1);
-    (count(b.max.x - o.x), count(b.max.y - o.y))
+    let count = |lo: f64, hi: f64| grid::cells_to_cover(lo, hi, size_m) as u64;
+    (count(o.x, b.max.x), count(o.y, b.max.y))
 }
 
 /// The grid's minimum corner: the scene's minimum corner rounded down to a multiple of
@@ -97,16 +97,14 @@ pub fn grid_cells_clipped(
     if total > MAX_CELLS {
         return Err(CellError::TooMany(total));
     }
-    let origin = grid_origin(b, size_m);
+    let grid = UniformGrid::square(grid_origin(b, size_m), size_m, nx as u32, ny as u32);
     let clip_bbox = clip.map(|c| c.iter().fold(Aabb2::EMPTY, |a, p| a.union(p.bbox())));
     let free = FreeSpace::new(scene);
     let cells: Vec<ViewCell> = (0..total)
         .into_par_iter()
         .filter_map(|k| {
-            let (i, j) = ((k % nx) as f64, (k / nx) as f64);
-            let lo = origin + DVec2::new(i, j) * size_m;
-            let hi = origin + DVec2::new(i + 1.0, j + 1.0) * size_m;
-            let cell = ViewCell::from_array([lo.x, lo.y, z0, hi.x, hi.y, z1]).ok()?;
+            let (i, j) = grid.coords(k as u32)?;
+            let cell = ViewCell::from_rect(grid.rect(i, j), z0, z1).ok()?;
             let keep = match (clip, clip_bbox) {
                 (Some(c), Some(cb)) => {
                     cb.intersects(&cell.aabb().xy()) && free.is_free_in(&cell, c)

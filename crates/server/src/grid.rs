@@ -4,10 +4,11 @@
 //! into square viewcells of 100 × 100 m, 2 m high, and keeps the client supplied with the
 //! PVS of the cell it stands in and of the adjacent ones. [`CellGrid`] is that partition:
 //! square cells of `cell_size_m` covering the scene's bounding rectangle, at eye height
-//! `z_range_m` (default 1.5–2.0 m, as `sightline cells`). A cell's id is `iy * nx + ix`.
+//! `z_range_m` (default 1.5–2.0 m, as `sightline cells`), numbered as every grid of
+//! sightline ([`UniformGrid`]): a cell's id is `iy * nx + ix`.
 
 use serde::Serialize;
-use sightline_geom::{Aabb3, DVec2, DVec3, ViewCell};
+use sightline_geom::{grid, Aabb3, DVec2, DVec3, UniformGrid, ViewCell};
 
 /// Eye-height range of the walking viewcells (the `cells` default).
 pub const EYE_Z_M: (f64, f64) = (1.5, 2.0);
@@ -61,9 +62,8 @@ impl CellGrid {
         if bounds.is_empty() {
             return Err(GridError::EmptyScene);
         }
-        let size = bounds.size();
-        let nx = (size.x / cell_size_m).ceil().max(1.0);
-        let ny = (size.y / cell_size_m).ceil().max(1.0);
+        let nx = grid::cells_to_cover(bounds.min.x, bounds.max.x, cell_size_m);
+        let ny = grid::cells_to_cover(bounds.min.y, bounds.max.y, cell_size_m);
         let total = nx * ny;
         // Written so that a NaN total is rejected too.
         if total.is_nan() || total > MAX_CELLS as f64 {
@@ -79,8 +79,18 @@ impl CellGrid {
         })
     }
 
+    /// The cells' footprints: the grid arithmetic (ids, a point's cell, a cell's square).
+    pub fn squares(&self) -> UniformGrid {
+        UniformGrid::square(
+            DVec2::from_array(self.origin),
+            self.cell_size_m,
+            self.nx,
+            self.ny,
+        )
+    }
+
     pub fn len(&self) -> usize {
-        self.nx as usize * self.ny as usize
+        self.squares().len()
     }
 
     pub fn is_empty(&self) -> bool {
@@ -89,10 +99,7 @@ impl CellGrid {
 
     /// The far corner of the grid.
     pub fn max(&self) -> DVec2 {
-        DVec2::new(
-            self.origin[0] + self.nx as f64 * self.cell_size_m,
-            self.origin[1] + self.ny as f64 * self.cell_size_m,
-        )
+        self.squares().max()
     }
 
     /// The cell whose column contains `p` (cells are closed at their low side, and the
@@ -101,49 +108,37 @@ impl CellGrid {
         if !p.is_finite() {
             return Err(PointError::NotFinite);
         }
-        let max = self.max();
-        let inside = p.x >= self.origin[0]
-            && p.x <= max.x
-            && p.y >= self.origin[1]
-            && p.y <= max.y
-            && p.z >= 0.0
-            && p.z <= self.top_m;
+        let squares = self.squares();
+        let (min, max) = (squares.origin, squares.max());
+        let inside = squares.bounds().contains(p.truncate()) && p.z >= 0.0 && p.z <= self.top_m;
         if !inside {
             return Err(PointError::Outside(
-                p.x,
-                p.y,
-                p.z,
-                self.origin[0],
-                max.x,
-                self.origin[1],
-                max.y,
-                self.top_m,
+                p.x, p.y, p.z, min.x, max.x, min.y, max.y, self.top_m,
             ));
         }
-        let ix = (((p.x - self.origin[0]) / self.cell_size_m).floor() as u32).min(self.nx - 1);
-        let iy = (((p.y - self.origin[1]) / self.cell_size_m).floor() as u32).min(self.ny - 1);
-        Ok(iy * self.nx + ix)
+        let (ix, iy) = squares.cell_of(p.truncate());
+        Ok(squares.id(ix, iy))
     }
 
     /// Grid coordinates of a cell.
     pub fn coords(&self, id: CellId) -> Option<(u32, u32)> {
-        (id < self.len() as u32).then(|| (id % self.nx, id / self.nx))
+        self.squares().coords(id)
     }
 
     /// The box of a cell.
     pub fn cell(&self, id: CellId) -> Option<ViewCell> {
-        let (ix, iy) = self.coords(id)?;
-        let s = self.cell_size_m;
-        let x0 = self.origin[0] + ix as f64 * s;
-        let y0 = self.origin[1] + iy as f64 * s;
-        ViewCell::from_array([x0, y0, self.z_range_m[0], x0 + s, y0 + s, self.z_range_m[1]]).ok()
+        let squares = self.squares();
+        let (ix, iy) = squares.coords(id)?;
+        let r = squares.rect_from_corner(ix, iy);
+        ViewCell::from_rect(r, self.z_range_m[0], self.z_range_m[1]).ok()
     }
 
     /// The (up to) 8 cells adjacent to `id`, ordered so that those lying ahead along
     /// `heading` come first (dual ray space paper, Fig. 5: the client will next enter one
     /// of the cells in front of it). A zero heading keeps the ring order.
     pub fn neighbours(&self, id: CellId, heading: DVec2) -> Vec<CellId> {
-        let Some((ix, iy)) = self.coords(id) else {
+        let squares = self.squares();
+        let Some((ix, iy)) = squares.coords(id) else {
             return vec![];
         };
         let h = heading.normalize_or_zero();
@@ -153,12 +148,10 @@ impl CellGrid {
                 if dx == 0 && dy == 0 {
                     continue;
                 }
-                let (jx, jy) = (ix as i64 + dx, iy as i64 + dy);
-                if jx < 0 || jy < 0 || jx >= self.nx as i64 || jy >= self.ny as i64 {
-                    continue;
+                if let Some(n) = squares.neighbour(ix, iy, dx, dy) {
+                    let along = DVec2::new(dx as f64, dy as f64).normalize().dot(h);
+                    out.push((along, n));
                 }
-                let along = DVec2::new(dx as f64, dy as f64).normalize().dot(h);
-                out.push((along, (jy as u32) * self.nx + jx as u32));
             }
         }
         // Stable: equal scores keep the ring order.
@@ -175,24 +168,21 @@ impl CellGrid {
             return None;
         }
         let id = self.locate(DVec3::new(p.x, p.y, self.z_range_m[0])).ok()?;
-        let (ix, iy) = self.coords(id)?;
-        let s = self.cell_size_m;
-        let lo = DVec2::new(
-            self.origin[0] + ix as f64 * s,
-            self.origin[1] + iy as f64 * s,
-        );
+        let squares = self.squares();
+        let (ix, iy) = squares.coords(id)?;
+        let r = squares.rect_from_corner(ix, iy);
         // Distance along the ray to the side crossed in x and in y.
-        let t = |pc: f64, lo: f64, hc: f64| {
+        let t = |pc: f64, lo: f64, hi: f64, hc: f64| {
             if hc > 0.0 {
-                (lo + s - pc) / hc
+                (hi - pc) / hc
             } else if hc < 0.0 {
                 (lo - pc) / hc
             } else {
                 f64::INFINITY
             }
         };
-        let (tx, ty) = (t(p.x, lo.x, h.x), t(p.y, lo.y, h.y));
-        let eps = 1e-9 * s;
+        let (tx, ty) = (t(p.x, r.min.x, r.max.x, h.x), t(p.y, r.min.y, r.max.y, h.y));
+        let eps = 1e-9 * self.cell_size_m;
         let dx = if tx <= ty + eps {
             h.x.signum() as i64
         } else {
@@ -203,27 +193,23 @@ impl CellGrid {
         } else {
             0
         };
-        let (jx, jy) = (ix as i64 + dx, iy as i64 + dy);
-        if (dx, dy) == (0, 0) || jx < 0 || jy < 0 || jx >= self.nx as i64 || jy >= self.ny as i64 {
+        if (dx, dy) == (0, 0) {
             return None;
         }
-        Some(jy as u32 * self.nx + jx as u32)
+        squares.neighbour(ix, iy, dx, dy)
     }
 
     /// The cell `steps` cells ahead of `id` along `heading` (rounded to the nearest of the
     /// 8 directions), if inside the grid: what a fast client reaches after the neighbour.
     pub fn ahead(&self, id: CellId, heading: DVec2, steps: u32) -> Option<CellId> {
-        let (ix, iy) = self.coords(id)?;
+        let squares = self.squares();
+        let (ix, iy) = squares.coords(id)?;
         let h = heading.normalize_or_zero();
         if h == DVec2::ZERO {
             return None;
         }
         let (dx, dy) = (h.x.round() as i64, h.y.round() as i64);
-        let (jx, jy) = (ix as i64 + dx * steps as i64, iy as i64 + dy * steps as i64);
-        if jx < 0 || jy < 0 || jx >= self.nx as i64 || jy >= self.ny as i64 {
-            return None;
-        }
-        Some(jy as u32 * self.nx + jx as u32)
+        squares.neighbour(ix, iy, dx * steps as i64, dy * steps as i64)
     }
 }
 

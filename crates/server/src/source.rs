@@ -161,27 +161,27 @@ impl FileSource {
         if total.is_nan() || total > MAX_CELLS as f64 {
             return Err(FileSourceError::TooMany(total as u64));
         }
-        let (nx, ny) = (nx as u32, ny as u32);
-        let mut index = vec![None; nx as usize * ny as usize];
+        let grid = CellGrid {
+            origin: [x0, y0],
+            cell_size_m: size,
+            nx: nx as u32,
+            ny: ny as u32,
+            z_range_m: [first.min.z, first.max.z],
+            top_m: scene.bounds.max.z.max(first.max.z),
+        };
+        let squares = grid.squares();
+        let mut index = vec![None; squares.len()];
         for (i, c) in cells.iter().enumerate() {
             let fx = (c.min.x - x0) / size;
             let fy = (c.min.y - y0) / size;
             let (ix, iy) = (fx.round(), fy.round());
             let aligned = (fx - ix).abs() * size <= tol && (fy - iy).abs() * size <= tol;
-            let id = iy as usize * nx as usize + ix as usize;
-            if !aligned || ix >= nx as f64 || iy >= ny as f64 || index[id].is_some() {
-                return Err(FileSourceError::NotAGrid(i, *c, first));
+            let on_grid = aligned && ix < nx && iy < ny;
+            match on_grid.then(|| squares.id(ix as u32, iy as u32) as usize) {
+                Some(id) if index[id].is_none() => index[id] = Some(i as u32),
+                _ => return Err(FileSourceError::NotAGrid(i, *c, first)),
             }
-            index[id] = Some(i as u32);
         }
-        let grid = CellGrid {
-            origin: [x0, y0],
-            cell_size_m: size,
-            nx,
-            ny,
-            z_range_m: [first.min.z, first.max.z],
-            top_m: scene.bounds.max.z.max(first.max.z),
-        };
         Ok(FileSource { file, grid, index })
     }
 }

@@ -51,7 +51,13 @@ proptest! {
 fn sidecar_from_a_pvs_file_holds_every_tile_the_truth_sees() {
     let scene = std::sync::Arc::new(generate::city(1, 40));
     let layout = Layout::build(&scene, 4).unwrap();
-    let cells = sightline_methods::check::street_cells(&scene, 10.0, (1.5, 2.0), 2);
+    let cells = sightline_methods::check::street_cells(
+        &scene,
+        10.0,
+        (1.5, 2.0),
+        2,
+        sightline_methods::check::Clearance::Box,
+    );
     let method = sightline_methods::create("dual-ray", scene.clone(), &Default::default()).unwrap();
     let sets: Vec<Vec<u32>> = cells.iter().map(|c| method.pvs(c).unwrap()).collect();
     let header = Header::new(

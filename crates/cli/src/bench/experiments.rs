@@ -78,28 +78,19 @@ fn cell_key(c: &ViewCell) -> String {
     c.to_string()
 }
 
-/// Street cells of `size_m` spread evenly over the scene: every k-th free grid cell.
 /// Side of the forest-sweep cells (m). The sweep's fusion of leaves depends on the
 /// cell being small against the leaves' umbrae: on the dense forest it culls ~40 % of
 /// the trees from 0.5 m cells, ~70 % from 0.25 m, nothing from 1–2 m.
 pub const FOREST_CELL_M: f64 = 0.5;
 
+/// `n` cells of the `sightline cells` grid of `size_m`, spread evenly over the `8 n`
+/// nearest the middle of the scene.
 pub fn pick_cells(scene: &Scene, size_m: f64, n: usize) -> Vec<ViewCell> {
     let all = sightline_scene::cells::grid_cells(scene, size_m, 1.5, 2.0).unwrap_or_default();
     if all.len() <= n {
         return all;
     }
-    // Prefer cells near the middle of the scene (edges see mostly empty ground), then
-    // spread evenly over them.
-    let c = scene.bounds.center().truncate();
-    let mut sorted = all;
-    sorted.sort_by(|a, b| {
-        let da = a.center().truncate().distance(c);
-        let db = b.center().truncate().distance(c);
-        da.total_cmp(&db)
-    });
-    let pool = &sorted[..sorted.len().min(n * 8).max(n)];
-    (0..n).map(|i| pool[i * pool.len() / n]).collect()
+    sightline_methods::check::near_middle(scene, &all, n, 8)
 }
 
 impl Bench {

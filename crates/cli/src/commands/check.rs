@@ -4,7 +4,7 @@ use crate::cli::Command;
 use crate::common::{load_scene, method_options, print_json, progress};
 use anyhow::{bail, Context};
 use sightline_geom::ViewCell;
-use sightline_methods::check::{check_cells, report_json, street_cells, TruthOptions};
+use sightline_methods::check::{check_cells, report_json, street_cells, Clearance, TruthOptions};
 use sightline_methods::{create, VisibilityMethod};
 use sightline_pvs::{PvsFile, StoredPvs};
 use std::sync::Arc;
@@ -18,7 +18,7 @@ fn read_cells(arg: &str, scene: &sightline_scene::Scene) -> anyhow::Result<Vec<V
         if k == 0 {
             bail!("--cells must name a cells.json or a positive number of cells");
         }
-        let cells = street_cells(scene, AUTO_CELL_M, (1.5, 2.0), k);
+        let cells = street_cells(scene, AUTO_CELL_M, (1.5, 2.0), k, Clearance::Box);
         if cells.is_empty() {
             bail!("no free {AUTO_CELL_M} m street cell found in the scene");
         }

@@ -50,7 +50,7 @@ pub use truth::{ground_truth, Truth, TruthOptions, TruthScene, Witness, INSET_M}
 use crate::{MethodError, VisibilityMethod};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use sightline_geom::{DVec2, ViewCell};
+use sightline_geom::{DVec2, UniformGrid, ViewCell};
 use sightline_scene::Scene;
 use std::time::Instant;
 
@@ -212,42 +212,116 @@ pub fn check_cells(
     Ok(aggregate(method.name(), per_cell))
 }
 
-/// Up to `k` square street cells of side `size_m` at heights `z = (z0, z1)` whose whole
-/// box is free of blocks (tested on a 5 × 5 grid at both heights), spread evenly over
-/// the scene in a deterministic order.
-pub fn street_cells(scene: &Scene, size_m: f64, z: (f64, f64), k: usize) -> Vec<ViewCell> {
+/// Which part of a street cell must be free of blocks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Clearance {
+    /// The whole box, probed on a 5 × 5 grid at both heights.
+    Box,
+    /// The centre column, probed at both heights: the cell may overlap facades (cells
+    /// wider than the streets, or cells that meet the buildings on purpose).
+    Centre,
+}
+
+/// Up to `k` square street cells of side `size_m` at heights `z = (z0, z1)` whose
+/// `clearance` is free of blocks, among the whole cells of the grid of `size_m` from the
+/// scene's minimum corner, spread evenly over the scene in a deterministic order.
+///
+/// ```
+/// use sightline_methods::check::{street_cells, Clearance};
+/// use sightline_scene::{Object, Scene};
+/// use sightline_geom::{DVec2, Polygon};
+/// // A 100 × 100 m scene with a 25 m wide building along its west side.
+/// let rect = |x0, y0, x1, y1| Polygon::rect(DVec2::new(x0, y0), DVec2::new(x1, y1));
+/// let scene = Scene::from_objects(vec![
+///     Object::block(None, rect(0.0, 0.0, 25.0, 100.0), 0.0, 10.0),
+///     Object::block(None, rect(99.0, 99.0, 100.0, 100.0), 0.0, 1.0),
+/// ]);
+/// let cells = street_cells(&scene, 20.0, (1.5, 2.0), usize::MAX, Clearance::Box);
+/// assert!(cells.iter().all(|c| c.min.x >= 40.0));
+/// let wider = street_cells(&scene, 20.0, (1.5, 2.0), usize::MAX, Clearance::Centre);
+/// // The cells at x = 20..40 have their centre in the street, their west side inside.
+/// assert!(wider.iter().any(|c| c.min.x == 20.0));
+/// ```
+pub fn street_cells(
+    scene: &Scene,
+    size_m: f64,
+    z: (f64, f64),
+    k: usize,
+    clearance: Clearance,
+) -> Vec<ViewCell> {
     if scene.objects.is_empty() || k == 0 || !(size_m > 0.0) {
         return Vec::new();
     }
     let ts = TruthScene::new(scene);
     let b = scene.bounds.xy();
-    let nx = ((b.size().x / size_m).floor() as usize).min(10_000);
-    let ny = ((b.size().y / size_m).floor() as usize).min(10_000);
-    let mut free = Vec::new();
-    for j in 0..ny {
-        for i in 0..nx {
-            let lo = b.min + DVec2::new(i as f64, j as f64) * size_m;
-            let ok = (0..5).all(|u| {
-                (0..5).all(|v| {
-                    let p = lo + DVec2::new(u as f64, v as f64) * (size_m / 4.0);
-                    ts.is_free(p.extend(z.0)) && ts.is_free(p.extend(z.1))
-                })
-            });
-            if ok {
-                if let Ok(c) =
-                    ViewCell::from_array([lo.x, lo.y, z.0, lo.x + size_m, lo.y + size_m, z.1])
-                {
-                    free.push(c);
-                }
-            }
+    let whole = |extent: f64| ((extent / size_m).floor() as u32).min(10_000);
+    let grid = UniformGrid::square(b.min, size_m, whole(b.size().x), whole(b.size().y));
+    let free: Vec<ViewCell> = (0..grid.len() as u32)
+        .filter_map(|id| {
+            let (i, j) = grid.coords(id)?;
+            // Exactly `size_m` wide, probed every `size_m / 4`.
+            let cell = ViewCell::from_rect(grid.rect_from_corner(i, j), z.0, z.1).ok()?;
+            is_clear(&ts, &cell, DVec2::splat(size_m), clearance).then_some(cell)
+        })
+        .collect();
+    spread(free, k)
+}
+
+/// Up to `k` of `cells` whose `clearance` is free of the blocks of `ts`, spread evenly
+/// over them in their order.
+pub fn street_cells_among(
+    ts: &TruthScene,
+    cells: &[ViewCell],
+    k: usize,
+    clearance: Clearance,
+) -> Vec<ViewCell> {
+    let free = cells
+        .iter()
+        .filter(|c| is_clear(ts, c, c.size().truncate(), clearance))
+        .copied()
+        .collect();
+    spread(free, k)
+}
+
+/// Whether the `clearance` of `cell` (of sides `size`) is free of blocks, at both of
+/// its heights.
+fn is_clear(ts: &TruthScene, cell: &ViewCell, size: DVec2, clearance: Clearance) -> bool {
+    let column = |p: DVec2| ts.is_free(p.extend(cell.min.z)) && ts.is_free(p.extend(cell.max.z));
+    match clearance {
+        Clearance::Centre => column(cell.center().truncate()),
+        Clearance::Box => {
+            let (lo, step) = (cell.min.truncate(), size / 4.0);
+            (0..5).all(|u| (0..5).all(|v| column(lo + DVec2::new(u as f64, v as f64) * step)))
         }
     }
-    if free.len() <= k {
-        return free;
+}
+
+/// `k` of `items` spread evenly (the middle one of each of `k` equal runs), or all of
+/// them if there are no more than `k`.
+fn spread(items: Vec<ViewCell>, k: usize) -> Vec<ViewCell> {
+    if items.len() <= k {
+        return items;
     }
     (0..k)
-        .map(|i| free[i * free.len() / k + free.len() / (2 * k)])
+        .map(|i| items[i * items.len() / k + items.len() / (2 * k)])
         .collect()
+}
+
+/// Up to `k` of `cells`, spread evenly over the `pool × k` of them nearest the middle of
+/// the scene (cells at its edges see mostly empty ground), nearest first.
+pub fn near_middle(scene: &Scene, cells: &[ViewCell], k: usize, pool: usize) -> Vec<ViewCell> {
+    let c = scene.bounds.center().truncate();
+    let mut sorted = cells.to_vec();
+    sorted.sort_by(|a, b| {
+        let da = a.center().truncate().distance(c);
+        let db = b.center().truncate().distance(c);
+        da.total_cmp(&db)
+    });
+    let pool = &sorted[..sorted.len().min(pool.saturating_mul(k))];
+    if pool.len() <= k {
+        return pool.to_vec();
+    }
+    (0..k).map(|i| pool[i * pool.len() / k]).collect()
 }
 
 /// The `check --json` report of `m` (the CLI's and the Python `check`'s): the aggregate,

@@ -48,6 +48,18 @@ pub enum Element {
 }
 
 impl Element {
+    /// Every element, in declaration order.
+    pub const ALL: [Element; 8] = [
+        Element::Right,
+        Element::Left,
+        Element::Top,
+        Element::Bottom,
+        Element::AntiDiagonal,
+        Element::Diagonal,
+        Element::Cell,
+        Element::Octagon,
+    ];
+
     pub const SEGMENTS: [Element; 6] = [
         Element::Right,
         Element::Left,
@@ -430,16 +442,7 @@ mod tests {
             (10, 12, 22, 35, 60),
             (22, 20, 34, 30, 80),
         ]);
-        for el in [
-            Element::Right,
-            Element::Left,
-            Element::Top,
-            Element::Bottom,
-            Element::Diagonal,
-            Element::AntiDiagonal,
-            Element::Cell,
-            Element::Octagon,
-        ] {
+        for el in Element::ALL {
             let half = DVec2::new(2.6, 1.7);
             let e = erode(&g, el, half);
             let mut kept = 0;

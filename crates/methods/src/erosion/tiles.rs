@@ -587,16 +587,7 @@ mod tests {
     #[test]
     fn tiled_reads_equal_the_whole_raster() {
         let f = field();
-        for el in [
-            Element::Right,
-            Element::Left,
-            Element::Top,
-            Element::Bottom,
-            Element::Diagonal,
-            Element::AntiDiagonal,
-            Element::Cell,
-            Element::Octagon,
-        ] {
+        for el in Element::ALL {
             for (half, fill) in [(DVec2::new(12.5, 12.5), 20), (DVec2::new(1.6, 3.1), 0)] {
                 let whole = MinPyramid::new(erode(&f.filled(fill), el, half));
                 let tiled = TiledErosion::new(f.clone(), el, half, fill);
