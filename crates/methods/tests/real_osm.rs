@@ -7,7 +7,7 @@
 //! Without `SIGHTLINE_REAL_OSM` (a bare `cargo test`) the test says so and does
 //! nothing; the test script always sets it and fails if the download fails.
 
-use sightline_methods::check::{compare, street_cells, TruthOptions, TruthScene};
+use sightline_methods::check::{compare, street_cells, Clearance, TruthOptions, TruthScene};
 use sightline_methods::{create, Method, MethodOptions};
 use sightline_scene::import::{load, ImportOptions};
 use std::path::PathBuf;
@@ -49,7 +49,7 @@ fn real_osm_extract_loads_with_counted_warnings_and_every_method_misses_nothing(
     assert!(count("height-default") > 0, "{counts:?}");
 
     let scene = Arc::new(scene);
-    let cells = street_cells(&scene, 25.0, (1.5, 2.0), 5);
+    let cells = street_cells(&scene, 25.0, (1.5, 2.0), 5, Clearance::Box);
     assert_eq!(cells.len(), 5);
     let oracle = TruthScene::new(&scene);
     let opts = TruthOptions::default();
