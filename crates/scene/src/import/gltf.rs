@@ -21,13 +21,71 @@ fn err(m: impl std::fmt::Display) -> ImportError {
     ImportError::Format(format!("invalid glTF: {m}"))
 }
 
+/// The glTF document of a .gltf or .glb and its JSON (the gltf crate does not expose
+/// extensions it does not know). Accessor indices of mesh primitives are checked
+/// first: the gltf crate's validation indexes the accessors with them unchecked and
+/// panics on one out of range.
+pub(crate) fn read(bytes: &[u8]) -> Result<(gltf::Gltf, serde_json::Value), String> {
+    let json = if bytes.starts_with(b"glTF") {
+        glb_json(bytes)?
+    } else {
+        serde_json::from_slice(bytes).map_err(|e| e.to_string())?
+    };
+    check_accessor_indices(&json)?;
+    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| e.to_string())?;
+    Ok((gltf, json))
+}
+
+/// The JSON chunk of a GLB.
+fn glb_json(glb: &[u8]) -> Result<serde_json::Value, String> {
+    let len = glb
+        .get(12..16)
+        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+        .ok_or("GLB shorter than its header")?;
+    let chunk = glb
+        .get(20..20usize.saturating_add(len))
+        .ok_or("GLB JSON chunk truncated")?;
+    serde_json::from_slice(chunk).map_err(|e| format!("GLB JSON chunk: {e}"))
+}
+
+/// Every accessor a mesh primitive names (attributes, indices, morph targets) exists.
+fn check_accessor_indices(json: &serde_json::Value) -> Result<(), String> {
+    let count = json
+        .get("accessors")
+        .and_then(|a| a.as_array())
+        .map_or(0, Vec::len);
+    let meshes = json.get("meshes").and_then(|m| m.as_array());
+    for (m, mesh) in meshes.into_iter().flatten().enumerate() {
+        let prims = mesh.get("primitives").and_then(|p| p.as_array());
+        for (k, prim) in prims.into_iter().flatten().enumerate() {
+            let targets = prim.get("targets").and_then(|t| t.as_array());
+            let maps = prim
+                .get("attributes")
+                .into_iter()
+                .chain(targets.into_iter().flatten());
+            let named = maps
+                .filter_map(|a| a.as_object())
+                .flat_map(|a| a.values())
+                .chain(prim.get("indices"));
+            for v in named {
+                if v.as_u64().is_none_or(|i| i >= count as u64) {
+                    return Err(format!(
+                        "mesh {m} primitive {k}: accessor {v} does not exist ({count} accessors)"
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Parse a .gltf (JSON; external buffers relative to `base`) or .glb.
 pub fn parse(
     bytes: &[u8],
     base: Option<&Path>,
     import: &ImportOptions,
 ) -> Result<Scene, ImportError> {
-    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(bytes).map_err(err)?;
+    let (gltf::Gltf { document, blob }, _) = read(bytes).map_err(err)?;
     let buffers = gltf::import_buffers(&document, base, blob).map_err(err)?;
     let mut diag = Diagnostics::new(import.strict);
     let mut objects = Vec::new();
@@ -128,4 +186,19 @@ pub fn parse(
     let mut scene = Scene::from_objects(objects);
     scene.warnings = diag.warnings;
     Ok(scene)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_primitive_naming_a_missing_accessor_is_an_error_not_a_panic() {
+        let doc = br#"{"asset":{"version":"2.0"},"accessors":[],
+            "meshes":[{"primitives":[{"attributes":{"POSITION":3}}]}]}"#;
+        let e = parse(doc, None, &ImportOptions::default()).expect_err("broken");
+        let msg = e.to_string();
+        assert!(msg.contains("accessor 3 does not exist"), "{msg}");
+        assert!(!msg.contains('\n'), "{msg}");
+    }
 }

@@ -381,9 +381,8 @@ impl Importer {
         batch_names: &Names,
         uri: &str,
     ) -> Result<(), String> {
-        let gltf::Gltf { document, blob } =
-            gltf::Gltf::from_slice(glb).map_err(|e| format!("broken GLB: {e}"))?;
-        let json = glb_json(glb)?;
+        let (gltf::Gltf { document, blob }, json) =
+            super::gltf::read(glb).map_err(|e| format!("broken GLB: {e}"))?;
         let bin = blob.clone();
         let buffers = gltf::import_buffers(&document, None, blob)
             .map_err(|e| format!("broken GLB buffers: {e}"))?;
@@ -650,18 +649,6 @@ impl Names {
         }
         Names::Tables(out)
     }
-}
-
-/// The JSON chunk of a GLB (the gltf crate does not expose extensions it does not know).
-fn glb_json(glb: &[u8]) -> Result<Value, String> {
-    let len = glb
-        .get(12..16)
-        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
-        .ok_or("GLB shorter than its header")?;
-    let chunk = glb
-        .get(20..20usize.saturating_add(len))
-        .ok_or("GLB JSON chunk truncated")?;
-    serde_json::from_slice(chunk).map_err(|e| format!("GLB JSON chunk: {e}"))
 }
 
 /// 16 finite numbers, column-major (glTF and 3D Tiles order).
