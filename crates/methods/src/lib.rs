@@ -15,10 +15,12 @@
 //! * [`ext_proj`] — Durand et al. 2000: `ext-proj`, extended projections and the sweep;
 //! * `sampled` — the ground truth of [`check`] as a method (not conservative); the `all`
 //!   baseline lives in this file;
-//! * shared leaves: `occluders` (the ground-based prisms and bucket grid of `dual-ray`,
-//!   the seed and erosion; `ext-proj` cuts its own convex pieces), `seed` (seed rays of
-//!   `dual-ray` and erosion, on `occluders`), `kdtree` (the occludee hierarchy of
-//!   `dual-ray` and `ext-proj`) and [`check`] (ground truth and comparison).
+//! * shared leaves: `occluders` (the one occluder model of every method: the inner
+//!   prisms, those standing on the ground, and a bucket grid; `dual-ray` fuses them into
+//!   slabs, erosion into a raster, `ext-proj` by levels into convex pieces), `seed`
+//!   (seed rays of `dual-ray` and erosion, on `occluders`), `kdtree` (the occludee
+//!   hierarchy of `dual-ray` and `ext-proj`) and [`check`] (ground truth and
+//!   comparison, apart from `occluders` on purpose).
 //!
 //! ```
 //! use std::sync::Arc;

@@ -1,17 +1,31 @@
-//! The occluder model shared by `dual-ray`, the seed and the erosion family: the
-//! ground-based prisms of every object's inner bound, in a local frame centred on the
-//! scene, and a uniform bucket grid over boxes.
+//! The occluder model of every method: the prisms of the objects' *inner* bounds
+//! (contained in their solids, so whatever they hide is hidden), selected here once, and
+//! a uniform bucket grid over boxes.
 //!
-//! Only prisms standing on the ground (`base <= GROUND_EPS_M`) occlude: Observation 1 of
-//! Koltun et al. 2001 needs occluders that contain the vertical wall under their top, and
-//! the seed's 2.5D horizon relies on the same. Raised prisms (arcades, overhangs) are
-//! ignored, which is conservative: an occluder left out can only make more visible.
+//! * [`inner_prisms`]: the inner prisms that can occlude at all (a finite top above its
+//!   base and the ground, a finite footprint with an exterior ring), with their
+//!   object's id.
+//! * [`ground_prisms`]: those standing on the ground, `base <= GROUND_M`. The ground is
+//!   opaque, so such a prism and the ground under it are one solid: Observation 1 of
+//!   Koltun et al. 2001 (an occluder contains the vertical wall under its top), the
+//!   seed's 2.5D horizon, erosion's height field and ext-proj's level sets extruded from
+//!   the ground rely on it. The threshold is exactly the ground: with any tolerance, the
+//!   gap under a slightly raised prism would count as solid and hide the sight lines
+//!   through it.
+//! * [`collect_occluders`]: the ground prisms as [`Occluder`]s in a local frame
+//!   ([`local_origin`]), for `dual-ray` (which fuses them into slabs) and the seed.
+//!   Erosion rasterizes [`ground_prisms`] into its height field; ext-proj fuses them by
+//!   height levels and cuts convex pieces, in scene coordinates.
+//!
+//! Raised prisms (arcades, overhangs) are left out by the 2.5D methods, which is
+//! conservative: an occluder left out can only make more visible. Ext-proj, whose
+//! occluders are any convex solids, uses them as they are.
 
 use sightline_geom::{DVec2, Polygon};
-use sightline_scene::Scene;
+use sightline_scene::{Prism, Scene};
 
-/// A prism whose base is at most this high counts as standing on the ground.
-pub(crate) const GROUND_EPS_M: f64 = 1e-6;
+/// A prism whose base is at most this high stands on the ground.
+pub(crate) const GROUND_M: f64 = 0.0;
 
 /// One ground-based occluder prism, in local scene coordinates.
 #[derive(Clone, Debug)]
@@ -124,35 +138,57 @@ impl BucketGrid {
     }
 }
 
-/// Collect the ground-based occluder prisms of every object's inner bound, translated by
-/// `-origin`.
+/// The inner prisms of `scene` that can occlude, with their object's id, in object
+/// order.
+pub(crate) fn inner_prisms(scene: &Scene) -> impl Iterator<Item = (u32, &Prism)> {
+    scene.objects.iter().enumerate().flat_map(|(id, o)| {
+        o.inner
+            .iter()
+            .filter(|p| is_solid(p))
+            .map(move |p| (id as u32, p))
+    })
+}
+
+/// The inner prisms of `scene` standing on the ground, with their object's id.
+pub(crate) fn ground_prisms(scene: &Scene) -> impl Iterator<Item = (u32, &Prism)> {
+    inner_prisms(scene).filter(|(_, p)| stands_on_ground(p))
+}
+
+/// Whether the prism stands on the ground (`base <= GROUND_M`).
+pub(crate) fn stands_on_ground(p: &Prism) -> bool {
+    p.base <= GROUND_M
+}
+
+/// A finite top above the base and the ground, and a finite footprint with an exterior
+/// ring.
+fn is_solid(p: &Prism) -> bool {
+    p.top > p.base
+        && p.top.is_finite()
+        && p.top > GROUND_M
+        && p.footprint.exterior.len() >= 3
+        && p.footprint.rings().flatten().all(|v| v.is_finite())
+}
+
+/// The ground prisms ([`ground_prisms`]) as occluders, translated by `-origin`.
 pub(crate) fn collect_occluders(scene: &Scene, origin: DVec2) -> Vec<Occluder> {
-    let mut out = Vec::new();
-    for (id, o) in scene.objects.iter().enumerate() {
-        for p in &o.inner {
-            if p.base > GROUND_EPS_M || p.top <= GROUND_EPS_M || !p.top.is_finite() {
-                continue;
-            }
+    ground_prisms(scene)
+        .map(|(object, p)| {
             let rings = local_rings(&p.footprint, origin);
-            if rings.is_empty() || rings.iter().flatten().any(|v| !v.is_finite()) {
-                continue;
-            }
             let mut min = DVec2::splat(f64::INFINITY);
             let mut max = DVec2::splat(f64::NEG_INFINITY);
             for v in rings.iter().flatten() {
                 min = min.min(*v);
                 max = max.max(*v);
             }
-            out.push(Occluder {
+            Occluder {
                 rings,
                 height: p.top,
                 min,
                 max,
-                object: id as u32,
-            });
-        }
-    }
-    out
+                object,
+            }
+        })
+        .collect()
 }
 
 /// The origin of the methods' local frame for `scene` (coordinates minus it keep their
@@ -174,4 +210,39 @@ pub(crate) fn local_rings(footprint: &Polygon, origin: DVec2) -> Vec<Vec<DVec2>>
         .filter(|r| r.len() >= 3)
         .map(|r| r.iter().map(|v| *v - origin).collect())
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sightline_scene::Object;
+
+    /// A prism a micrometre above the ground is raised (the gap under it stays open);
+    /// flat and inverted prisms occlude nothing.
+    #[test]
+    fn only_prisms_exactly_on_the_ground_stand_on_it() {
+        let rect = Polygon::rect(DVec2::new(0.0, 0.0), DVec2::new(10.0, 10.0));
+        let prism = |base: f64, top: f64| Prism::new(rect.clone(), base, top);
+        let scene = Scene::from_objects(vec![
+            Object::blocks(None, vec![prism(0.0, 10.0)]),
+            Object::blocks(None, vec![prism(1e-6, 10.0)]),
+            Object::blocks(None, vec![prism(3.0, 10.0), prism(0.0, 0.0)]),
+            Object::blocks(None, vec![prism(5.0, 2.0), prism(0.0, f64::INFINITY)]),
+        ]);
+        let ids = |it: &mut dyn Iterator<Item = (u32, &Prism)>| -> Vec<(u32, f64)> {
+            it.map(|(id, p)| (id, p.base)).collect()
+        };
+        assert_eq!(
+            ids(&mut inner_prisms(&scene)),
+            vec![(0, 0.0), (1, 1e-6), (2, 3.0)]
+        );
+        assert_eq!(ids(&mut ground_prisms(&scene)), vec![(0, 0.0)]);
+        let occ = collect_occluders(&scene, DVec2::new(5.0, 5.0));
+        assert_eq!(occ.len(), 1);
+        assert_eq!((occ[0].object, occ[0].height), (0, 10.0));
+        assert_eq!(
+            (occ[0].min, occ[0].max),
+            (DVec2::splat(-5.0), DVec2::splat(5.0))
+        );
+    }
 }

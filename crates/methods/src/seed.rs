@@ -35,7 +35,7 @@
 //! Along those, most prisms of a bucket stand beside the ray: a ray missing a prism's
 //! (slightly widened) bounding box is passed without testing its edges.
 
-use crate::occluders::{local_rings, BucketGrid, Occluder, GROUND_EPS_M};
+use crate::occluders::{local_rings, BucketGrid, Occluder, GROUND_M};
 use sightline_geom::{Aabb3, DVec2};
 use sightline_scene::Scene;
 
@@ -132,7 +132,7 @@ impl SeedGrid {
             let len = edges.len() as u32 - first;
             // Flat objects on the ground (streets, squares) are never reached above the
             // ground by a ray, nor do they block one: they stay with the tests.
-            let top = if top.is_finite() && top > GROUND_EPS_M {
+            let top = if top.is_finite() && top > GROUND_M {
                 top
             } else {
                 f64::NEG_INFINITY
@@ -142,7 +142,7 @@ impl SeedGrid {
             } else {
                 u32::MAX
             };
-            if len >= 3 && min.is_finite() && max.is_finite() && top.max(occ_top) > GROUND_EPS_M {
+            if len >= 3 && min.is_finite() && max.is_finite() && top.max(occ_top) > GROUND_M {
                 prisms.push(Prism {
                     first,
                     len,

@@ -12,6 +12,11 @@
 //! pixel are found too. Every id reported comes with a [`Witness`]: the viewpoint and
 //! the direction of a sample that saw it.
 //!
+//! The check is deliberately apart from the methods' occluder model (`occluders`): it
+//! renders and casts rays against every object's full geometry, not the inner bounds
+//! the methods occlude with, so an error in that model shows as a missed object instead
+//! of being shared by the methods and their oracle.
+//!
 //! The VS is a *lower bound* of the true visible set: an object in the VS is visible,
 //! so a conservative PVS must contain it. Grazing sight lines do not count
 //!: a targeted ray is accepted only if it stays farther than [`GRAZE_M`] from

@@ -2,7 +2,8 @@
 //! (erosion acts on the union of the buildings, and a union drawn piece by piece would
 //! crack along shared edges), and the filling of closed courtyards.
 //!
-//! Occluders are the *inner* bounds of the objects (§4.2) standing on the ground; their
+//! Occluders are the *inner* bounds of the objects (§4.2) standing on the ground, the
+//! ground prisms of the methods' one occluder model (`crate::occluders`); their
 //! union with the ground half-space is a height field `H(x, y)`. It is stored on a
 //! square pixel grid as an **inner raster** `G`: `G(q) ≤ H(x)` for every point `x` of
 //! pixel `q`. A pixel gets `G(q) = min h_b` over the prisms `b` touching it, if it lies
@@ -22,6 +23,7 @@
 //! is `z1` and whose free pixels escape below `f_c`, the filled field keeps `F(q)` where
 //! `F(q) > max(z1, f_c)` and `G(q)` elsewhere (see [`HeightField::filled`]).
 
+use crate::occluders::ground_prisms;
 use sightline_geom::{boolean, Aabb2, DVec2, Polygon};
 use sightline_scene::Scene;
 use std::sync::OnceLock;
@@ -409,25 +411,16 @@ fn merge(ranges: impl Iterator<Item = (i64, i64)>) -> Vec<(i64, i64)> {
 }
 
 impl HeightField {
-    /// Rasterize the ground-standing inner prisms of `scene`.
+    /// Rasterize the ground prisms of `scene` (`crate::occluders::ground_prisms`).
     pub fn build(scene: &Scene) -> Self {
         let mut prisms: Vec<(&Polygon, u16, Aabb2)> = Vec::new();
-        for o in &scene.objects {
-            for p in &o.inner {
-                if p.base > 1e-6 || !p.top.is_finite() || p.top <= 0.0 {
-                    continue;
-                }
-                if p.footprint.exterior.len() < 3 || !(p.footprint.area() > 0.0) {
-                    continue;
-                }
-                let bb = p.footprint.bbox();
-                if !(bb.min.is_finite() && bb.max.is_finite()) {
-                    continue;
-                }
-                let h = (p.top / DM).floor().min(u16::MAX as f64 - 1.0) as u16;
-                if h > 0 {
-                    prisms.push((&p.footprint, h, bb));
-                }
+        for (_, p) in ground_prisms(scene) {
+            if !(p.footprint.area() > 0.0) {
+                continue;
+            }
+            let h = (p.top / DM).floor().min(u16::MAX as f64 - 1.0) as u16;
+            if h > 0 {
+                prisms.push((&p.footprint, h, p.footprint.bbox()));
             }
         }
         let bounds = prisms.iter().fold(Aabb2::EMPTY, |b, p| b.union(p.2));

@@ -1,12 +1,14 @@
 //! Occluders of the extended projections and their selection (Durand et al. 2000,
 //! §3.3 and §6.1 "Occluder selection").
 //!
-//! * Occluders are the objects' *inner* 2.5D prisms. Touching buildings are
-//!   fused first: the ground-standing prisms form a height field whose
-//!   level sets `{H ≥ h}` are unioned and extruded from the ground to `h`; each union
-//!   is split into convex pieces (Hertel–Mehlhorn on a triangulation), so a whole
-//!   street block becomes a few large convex occluders instead of many small ones,
-//!   and slices (§3.3) of neighbouring pieces meet exactly.
+//! * Occluders are the objects' *inner* 2.5D prisms, those of the methods' one occluder
+//!   model (`crate::occluders`, in scene coordinates). Touching buildings are fused
+//!   first: the ground prisms (base exactly on the ground: a gap under a raised prism
+//!   must stay open) form a height field whose level sets `{H ≥ h}` are unioned and
+//!   extruded from the ground to `h`; each union is split into convex pieces
+//!   (Hertel–Mehlhorn on a triangulation), so a whole street block becomes a few large
+//!   convex occluders instead of many small ones, and slices (§3.3) of neighbouring
+//!   pieces meet exactly. Raised prisms are cut into convex pieces alone.
 //! * Union results live on a 1 mm grid: every *boundary* edge of a piece is moved
 //!   inward by [`INWARD_M`]; shared (internal) edges stay put.
 //! * Selection: an occluder matters where its solid angle, seen from the cell, exceeds
@@ -19,6 +21,7 @@
 //!   (§6.1: "we also use the PVS of the parent cell to cull hidden occluders").
 
 use super::projection::{clip_halfplane, polygon_area, ConvexOccluder};
+use crate::occluders::{inner_prisms, stands_on_ground};
 use rstar::{primitives::GeomWithData, primitives::Rectangle, RTree, AABB};
 use sightline_geom::{boolean, Aabb3, DVec2, Polygon};
 use sightline_scene::{Geometry, Scene};
@@ -26,10 +29,6 @@ use std::collections::HashMap;
 
 /// Inward move of boundary edges of fused footprints (two grid steps of the booleans).
 pub(crate) const INWARD_M: f64 = 2.0 * boolean::GRID_M;
-
-/// Prisms whose base is at most this high stand on the ground and join the fusion
-/// (exactly the ground: a gap under a raised prism must stay open).
-const GROUND_M: f64 = 0.0;
 
 /// At most this many height levels are fused (levels are chosen among the distinct
 /// heights; each building counts at the highest level not above its top).
@@ -79,22 +78,17 @@ pub struct OccluderSet {
 impl OccluderSet {
     pub(crate) fn build(scene: &Scene, solid_angle: f64) -> Self {
         let mut pieces = Vec::new();
-        // Ground-standing inner prisms, by height.
+        // Ground prisms, by height, for the fusion; raised ones as they are.
         let mut ground: Vec<(&Polygon, f64)> = Vec::new();
         let mut ground_ids: Vec<u32> = Vec::new();
-        for (id, o) in scene.objects.iter().enumerate() {
-            for p in &o.inner {
-                if !(p.top > p.base) {
-                    continue;
-                }
-                if p.base <= GROUND_M {
-                    ground.push((&p.footprint, p.top));
-                    ground_ids.push(id as u32);
-                } else {
-                    let whole = cross_section(&p.footprint, p.top - p.base);
-                    for (poly, _) in convex_pieces(&p.footprint) {
-                        push_prism(&mut pieces, poly, p.base, p.top, whole, vec![id as u32]);
-                    }
+        for (id, p) in inner_prisms(scene) {
+            if stands_on_ground(p) {
+                ground.push((&p.footprint, p.top));
+                ground_ids.push(id);
+            } else {
+                let whole = cross_section(&p.footprint, p.top - p.base);
+                for (poly, _) in convex_pieces(&p.footprint) {
+                    push_prism(&mut pieces, poly, p.base, p.top, whole, vec![id]);
                 }
             }
         }

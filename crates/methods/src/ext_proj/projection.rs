@@ -15,6 +15,7 @@
 //! slicing; the union-aware inner coverage of `depth_map.rs` then fuses the pieces.
 
 use super::planes::{view, Direction, LocalBox};
+use crate::occluders::GROUND_M;
 use sightline_geom::{DVec2, DVec3};
 
 /// Minimum clearance between a clipped occluder and the cell's far face along the
@@ -29,7 +30,7 @@ pub(crate) const FACE_CLEARANCE_M: f64 = 1e-3;
 pub(crate) const BELOW_GROUND_M: f64 = 100.0;
 
 fn below_ground(base: f64) -> f64 {
-    if base <= 0.0 {
+    if base <= GROUND_M {
         -BELOW_GROUND_M
     } else {
         base
