@@ -26,16 +26,7 @@ fn rects() -> impl Strategy<Value = Vec<(f64, f64, f64, f64, f64)>> {
 
 fn elements() -> impl Strategy<Value = (Element, DVec2)> {
     (0..8usize, 1..6i32, 1..6i32).prop_map(|(k, a, b)| {
-        let el = [
-            Element::Right,
-            Element::Left,
-            Element::Top,
-            Element::Bottom,
-            Element::AntiDiagonal,
-            Element::Diagonal,
-            Element::Cell,
-            Element::Octagon,
-        ][k];
+        let el = Element::ALL[k];
         (el, DVec2::new(a as f64 * 0.7, b as f64 * 0.6))
     })
 }

@@ -60,15 +60,6 @@ impl Element {
         Element::Octagon,
     ];
 
-    pub const SEGMENTS: [Element; 6] = [
-        Element::Right,
-        Element::Left,
-        Element::Top,
-        Element::Bottom,
-        Element::AntiDiagonal,
-        Element::Diagonal,
-    ];
-
     /// The vertices of the (convex) element for half sizes `half = (a, b)`, relative
     /// to the cell centre.
     pub fn vertices(self, half: DVec2) -> Vec<DVec2> {
