@@ -136,8 +136,7 @@ pub struct ErosionMethod {
     scene: Arc<Scene>,
     field: Arc<HeightField>,
     tops: Vec<Vec<Top>>,
-    bins: usize,
-    /// The bin geometry of the full and of the coarse pass (built once).
+    /// The azimuth bins of the full and of the coarse pass (built once).
     fine: Bins,
     coarse: Bins,
     /// Eroded occluders per (cell half size in µm, element, fill threshold in dm), with
@@ -231,7 +230,6 @@ impl ErosionMethod {
             scene,
             field: Arc::new(field),
             tops,
-            bins: bins as usize,
             fine: Bins::new(bins as usize),
             coarse: Bins::new(bins as usize / COARSE_FACTOR),
             cache: Mutex::new((0, HashMap::new())),
@@ -505,7 +503,7 @@ impl ErosionMethod {
         visible: &mut Vec<u32>,
     ) {
         let mut memo = SampleMemo::new();
-        if self.bins / COARSE_FACTOR < 64 {
+        if self.fine.n / COARSE_FACTOR < 64 {
             let pass = Pass {
                 seeds: None,
                 memo: &mut memo,
@@ -643,7 +641,7 @@ impl VisibilityMethod for ErosionMethod {
 
     fn params(&self) -> Vec<(String, String)> {
         vec![
-            ("bins".into(), self.bins.to_string()),
+            ("bins".into(), self.fine.n.to_string()),
             ("pixel_m".into(), self.field.g.pixel_m.to_string()),
         ]
     }
