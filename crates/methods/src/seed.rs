@@ -62,6 +62,23 @@ pub(crate) struct SeedScratch {
     gen: u32,
     /// `(distance, last crossing, prism, as an occluder)`.
     events: Vec<(f64, f64, u32, bool)>,
+    /// The objects marked by the last [`SeedGrid::aim`].
+    pub(crate) marked: Vec<u32>,
+}
+
+/// Where a march may stop early: beyond distance `t_max`, or once the horizon reaches
+/// `slope` (no target is left above it).
+#[derive(Clone, Copy, Debug)]
+struct Limit {
+    t_max: f64,
+    slope: f64,
+}
+
+impl Limit {
+    const NONE: Limit = Limit {
+        t_max: f64::INFINITY,
+        slope: f64::INFINITY,
+    };
 }
 
 /// One prism of the seed: an occludee (an object's outer prism), an occluder (a
@@ -248,11 +265,13 @@ impl SeedGrid {
             s.stamp = vec![0; self.prisms.len()];
             s.gen = 0;
         }
+        s.marked.clear();
         let z = cell.max.z;
         let mut count = 0;
         for eye in self.eyes(cell) {
             let mut ray = |a: f64, seen: &mut [bool], s: &mut SeedScratch| {
-                let (m, sig) = self.march(eye, z, DVec2::new(a.cos(), a.sin()), seen, s);
+                let d = DVec2::new(a.cos(), a.sin());
+                let (m, sig) = self.march(eye, z, d, Limit::NONE, seen, s);
                 count += m;
                 sig
             };
@@ -288,9 +307,50 @@ impl SeedGrid {
         count
     }
 
+    /// One ray from `eye` (at height `z`) through the point `at` of `target`'s
+    /// footprint (local frame), stopping past the target or once the horizon hides its
+    /// top: every object it reaches first is marked in `seen` (as by
+    /// [`SeedGrid::mark`], with the same guarantee) and listed in `s.marked`. Returns
+    /// their number.
+    pub(crate) fn aim(
+        &self,
+        eye: DVec2,
+        z: f64,
+        target: &Aabb3,
+        at: DVec2,
+        seen: &mut [bool],
+        s: &mut SeedScratch,
+    ) -> usize {
+        s.marked.clear();
+        if s.stamp.len() != self.prisms.len() {
+            s.stamp = vec![0; self.prisms.len()];
+            s.gen = 0;
+        }
+        let (lo, hi) = (target.min.truncate(), target.max.truncate());
+        let to = at - eye;
+        let len = to.length();
+        if !(len > 0.0) || !len.is_finite() {
+            return 0;
+        }
+        let near = eye.clamp(lo, hi).distance(eye);
+        let far = (eye - lo).abs().max((eye - hi).abs()).length();
+        let top = target.max.z - z;
+        let slope = if top >= 0.0 {
+            if near > 0.0 {
+                top / near
+            } else {
+                f64::INFINITY
+            }
+        } else {
+            top / far
+        };
+        let limit = Limit { t_max: far, slope };
+        self.march(eye, z, to / len, limit, seen, s).0
+    }
+
     /// Up to [`MAX_EYES`] points of the top face of `cell` outside every footprint,
     /// spread out (farthest point first, starting next to the centre).
-    fn eyes(&self, cell: &Aabb3) -> Vec<DVec2> {
+    pub(crate) fn eyes(&self, cell: &Aabb3) -> Vec<DVec2> {
         let n = CANDIDATES_PER_SIDE;
         let f = |k: usize| (k as f64 + 0.5) / n as f64;
         let mut free: Vec<DVec2> = (0..n * n)
@@ -329,6 +389,7 @@ impl SeedGrid {
         eye: DVec2,
         z: f64,
         d: DVec2,
+        limit: Limit,
         seen: &mut [bool],
         s: &mut SeedScratch,
     ) -> (usize, u64) {
@@ -392,6 +453,9 @@ impl SeedGrid {
             // Nothing further can rise above the horizon (a prism under the eye has a
             // negative slope, below a horizon ≥ 0).
             if t0 > 0.0 && horizon >= 0.0 && horizon >= (self.max_top - z) / t0 {
+                break;
+            }
+            if t0 > limit.t_max || horizon >= limit.slope {
                 break;
             }
             let events = &mut s.events;
@@ -462,6 +526,7 @@ impl SeedGrid {
                 let low = horizon.max((p.base - z) / t).max(-z / t);
                 if slope_top > low + CLEAR_MARGIN * (1.0 + low.abs()) && !seen[p.object as usize] {
                     seen[p.object as usize] = true;
+                    s.marked.push(p.object);
                     marked += 1;
                 }
             }

@@ -4,7 +4,8 @@
 //!
 //! * every object the brute force sees is in both PVS (conservative);
 //! * `dual-ray` at every resolution contains `dual-ray-exact`;
-//! * the virtual occluders only drop hidden objects (PVS with them ⊆ without, ⊇ seen).
+//! * the virtual occluders only drop hidden objects (PVS with them ⊆ without, ⊇ seen);
+//! * so do the boxes proven hidden, used as occluders by the later tests.
 
 use proptest::prelude::*;
 use sightline_geom::{DVec2, DVec3, Polygon, ViewCell};
@@ -245,4 +246,49 @@ proptest! {
             }
         }
     }
+
+    /// Boxes proven hidden occlude the later tests: with them the PVS is contained in
+    /// the one without, still holds everything the brute force sees, and `dual-ray`
+    /// contains `dual-ray-exact` (both with them).
+    #[test]
+    fn hidden_occluders_only_drop_hidden((boxes, cell) in dense_city()) {
+        let scene = scene_of(&boxes);
+        let vis = brute_visible(&boxes, &cell);
+        let exact = DualRay::new("dual-ray-exact", scene.clone(), Planarity::Exact)
+            .pvs_with_stats(&cell)
+            .0;
+        for planarity in [Planarity::Exact, Planarity::Discrete { resolution_px: 32 }] {
+            let with = DualRay::new("dual-ray", scene.clone(), planarity).pvs_with_stats(&cell).0;
+            let without = DualRay::new("dual-ray", scene.clone(), planarity)
+                .with_hidden_occluders(false)
+                .pvs_with_stats(&cell)
+                .0;
+            for id in &with {
+                prop_assert!(without.contains(id), "{:?}: {} only with hidden boxes", planarity, id);
+            }
+            for id in vis.iter().chain(&exact) {
+                prop_assert!(with.contains(id), "{:?}: misses {} ({:?})", planarity, id, with);
+            }
+        }
+    }
+}
+
+/// Rows of 10 m deep blocks along 12 m streets, some blocks missing, heights 3–40 m:
+/// the blocks behind the first row are hidden kd-nodes, and hide what stands behind
+/// them.
+fn dense_city() -> impl Strategy<Value = (Vec<Bx>, ViewCell)> {
+    let block =
+        (0i32..12, 0i32..12, 0i32..3, 3u32..40, any::<bool>()).prop_map(|(i, j, k, h, wide)| {
+            // Parts of a 10 m deep block, touching or overlapping their neighbours.
+            let (x0, y0) = (i as f64 * 22.0 + k as f64 * 4.0, j as f64 * 22.0);
+            let w = if wide { 10.0 } else { 6.0 };
+            Bx {
+                min: DVec3::new(x0, y0, 0.0),
+                max: DVec3::new(x0 + w, y0 + 10.0, h as f64),
+            }
+        });
+    (
+        prop::collection::vec(block, 20..48),
+        square_cell(260, 2..20),
+    )
 }

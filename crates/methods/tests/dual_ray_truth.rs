@@ -73,3 +73,36 @@ fn lyon_street_cells_miss_nothing() {
         .collect();
     no_miss(scene, &pick);
 }
+
+/// Street crossings of a generated metropolis, where boxes proven hidden occlude the
+/// later tests: nothing the ground truth sees is missed, the hidden boxes are used, and
+/// the PVS with them is contained in the one without.
+#[test]
+fn metropolis_hidden_occluders_miss_nothing() {
+    use sightline_methods::dual_ray::{crossing_cells, DualRay, Planarity};
+    let scene = Arc::new(sightline_scene::generate::metropolis(3, 3000));
+    let cells = crossing_cells(&scene, 100.0, 3);
+    assert!(!cells.is_empty());
+    let planarity = Planarity::Discrete { resolution_px: 128 };
+    let on = DualRay::new("dual-ray", scene.clone(), planarity);
+    let off = DualRay::new("dual-ray", scene.clone(), planarity).with_hidden_occluders(false);
+    let ts = TruthScene::new(&scene);
+    let mut used = 0;
+    for c in &cells {
+        let (with, st) = on.pvs_with_stats(c);
+        let (without, st_off) = off.pvs_with_stats(c);
+        used += st.hidden_pieces;
+        assert_eq!(st_off.hidden_pieces, 0);
+        for id in &with {
+            assert!(
+                without.binary_search(id).is_ok(),
+                "{c}: {id} only with hidden boxes"
+            );
+        }
+        let truth = ts.ground_truth(c, &truth_opts());
+        for id in &truth.visible {
+            assert!(with.binary_search(id).is_ok(), "{c}: misses {id}");
+        }
+    }
+    assert!(used > 0, "no hidden box was used");
+}

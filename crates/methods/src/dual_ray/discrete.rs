@@ -385,7 +385,7 @@ fn hidden_plain(scratch: &mut Scratch, first: u32, resolution: u32) -> bool {
 #[cfg(test)]
 mod tests {
     use super::super::occluders::Axis;
-    use super::super::plane::orient;
+    use super::super::plane::{orient, Hidden};
     use super::super::{DualRay, Planarity};
     use super::*;
     use sightline_geom::{Aabb3, DVec3};
@@ -414,7 +414,7 @@ mod tests {
                         continue; // not separated along this axis
                     };
                     let decomp = m.decomposition(axis);
-                    Planar::build(&mut scratch, decomp, &pair, None);
+                    Planar::build(&mut scratch, decomp, &pair, None, Hidden::NONE);
                     for res in [16, 64, 256] {
                         let h = hidden(&mut scratch, res);
                         let plain = hidden_plain(&mut scratch, START_LEVEL, res);

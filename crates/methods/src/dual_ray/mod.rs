@@ -17,7 +17,11 @@
 //!   decomposed into slabs along x and y, once per scene;
 //! * `crate::kdtree` — the hierarchical subdivision of the occludees (§3): a node hidden
 //!   from the cell stops the recursion; objects of visible leaves are tested one by one
-//!   (their outer prisms' boxes);
+//!   (their outer prisms' boxes); the nearer child first (front to back);
+//! * `hidden` — every box proven hidden becomes an occluder of the later tests (its
+//!   column is hidden, so it acts as a virtual occluder in the sense of Koltun et al.
+//!   2000): a few large boxes stand for the thousands of slabs a long shaft crosses, and
+//!   the slabs under them are not gathered; the PVS can only shrink;
 //! * `plane` — reduction of a box-to-box test to a planar problem (§4): upper rims,
 //!   shaft, ceiling plane `T`, occluders cut by `T`, dual ray space `RS`;
 //! * `discrete` — §5.2 with exact union coverage per row (no cracks), most rows decided
@@ -27,6 +31,10 @@
 //!   without a test, and so are the kd-nodes holding them (it changes no PVS);
 //! * `witness` — a single ray verified clear (exact predicates) answers "visible"
 //!   without gathering the whole shaft; it changes no answer of either planar method;
+//! * aimed rays — an object the near occluders do not hide is aimed at by seed rays
+//!   from the cell's eyes through its middle and its sides facing them
+//!   (`crate::seed`'s march, stopping past the object): met first, it is visible, and
+//!   its whole shaft is not gathered (no PVS changes: the seed's argument);
 //! * `vo` — virtual occluders (Koltun et al. 2000), opt-in
 //!   ([`DualRay::with_virtual_occluders`]): a long shaft the near occluders do not
 //!   close is tried strip by strip of the cell, each strip with vertical rectangles on
@@ -34,9 +42,10 @@
 //!   cell); they only drop provably hidden nodes.
 //!
 //! Order of one box-to-box test along an axis: the occluders next to the narrower box
-//! are gathered first; a witness ray from their gaps, checked along its own line through
-//! the rest of the shaft, settles "visible"; else their coverage may already settle
-//! "hidden"; only then is the whole shaft gathered and tested.
+//! are gathered first, with the hidden boxes over the whole shaft; a witness ray from
+//! their gaps, checked along its own line through the rest of the shaft, settles
+//! "visible"; else their coverage may already settle "hidden"; for an object, rays aimed
+//! at it may settle "visible"; only then is the whole shaft gathered and tested.
 //!
 //! Degenerate configurations: boxes overlapping in both x and y (the cell inside a
 //! node, an object straddling the cell) have no separating planes and count as visible;
@@ -63,6 +72,7 @@
 
 mod discrete;
 mod exact;
+mod hidden;
 mod occluders;
 mod plane;
 mod table1;
@@ -74,8 +84,9 @@ pub use table1::{crossing_cells, table1, Table1Row};
 use crate::kdtree::{KdTree, NodeKind};
 use crate::seed::{SeedGrid, SeedScratch};
 use crate::{MethodError, MethodOptions, VisibilityMethod};
+use hidden::HiddenSet;
 use occluders::{Axis, Decomposition};
-use plane::{Planar, Scratch};
+use plane::{Hidden, Planar, Scratch};
 use rayon::prelude::*;
 use sightline_geom::{Aabb3, DVec2, DVec3, ViewCell};
 use sightline_scene::Scene;
@@ -134,6 +145,13 @@ pub struct TraversalStats {
     pub vo_tests: u64,
     /// Segments of those virtual occluders proven hidden.
     pub vo_rects: u64,
+    /// Boxes proven hidden and recorded as occluders of the later tests (`hidden`).
+    pub hidden_boxes: u64,
+    /// Pieces of the planar problems that were hidden boxes.
+    pub hidden_pieces: u64,
+    /// Boxes found visible by rays aimed at them (`crate::seed`), before their whole
+    /// shaft was gathered.
+    pub aimed: u64,
     /// Axis tests hidden strip by strip (the cell cut into strips, each with its own
     /// virtual occluders), without the whole shaft.
     pub vo_hidden: u64,
@@ -153,8 +171,14 @@ pub struct DualRay {
     always: Vec<u32>,
     /// Rays from eyes of the cell that report what they meet first.
     seed: SeedGrid,
+    /// Parent of each kd-node (`u32::MAX` for the root).
+    parent: Vec<u32>,
+    /// The leaves holding each object: `leaf_ids[leaf_start[o]..leaf_start[o + 1]]`.
+    leaf_start: Vec<u32>,
+    leaf_ids: Vec<u32>,
     use_seed: bool,
     use_vo: bool,
+    use_hidden: bool,
 }
 
 /// Prepare `dual-ray` or `dual-ray-exact` for `scene`.
@@ -228,6 +252,8 @@ impl DualRay {
                 items.push((id as u32, Aabb3::new(b.min - o3, b.max - o3)));
             }
         }
+        let tree = KdTree::build(items);
+        let (parent, leaf_start, leaf_ids) = node_links(&tree, scene.objects.len());
         DualRay {
             name,
             planarity,
@@ -235,11 +261,15 @@ impl DualRay {
             origin,
             decomp_x,
             decomp_y,
-            tree: KdTree::build(items),
+            tree,
             always,
             seed,
+            parent,
+            leaf_start,
+            leaf_ids,
             use_seed: true,
             use_vo: false,
+            use_hidden: true,
         }
     }
 
@@ -249,6 +279,13 @@ impl DualRay {
     /// visible set and of `dual-ray-exact` with them on.
     pub fn with_virtual_occluders(mut self, on: bool) -> Self {
         self.use_vo = on;
+        self
+    }
+
+    /// Turn the hidden boxes as occluders (`hidden`) on or off (on by default). Off, no
+    /// test uses what an earlier one proved; on, the PVS can only shrink.
+    pub fn with_hidden_occluders(mut self, on: bool) -> Self {
+        self.use_hidden = on;
         self
     }
 
@@ -266,32 +303,59 @@ impl DualRay {
         let mut stats = TraversalStats::default();
         let mut out: Vec<u32> = self.always.clone();
         let (seen, node_seen) = self.seed_marks(&a, &mut stats);
+        let mut aimer = Aimer {
+            eyes: if self.use_seed {
+                self.seed.eyes(&a)
+            } else {
+                Vec::new()
+            },
+            z: a.max.z,
+            seen,
+            node_seen,
+            scratch: SeedScratch::default(),
+        };
         let mut strips = match self.tree.nodes.first() {
             Some(root) if self.use_vo => Some(Strips::new(&a, &root.bbox)),
             _ => None,
         };
         let mut stack: Vec<u32> = Vec::new();
+        let mut hidden = self
+            .use_hidden
+            .then(|| HiddenSet::new(&self.decomp_x, &self.decomp_y));
         if !self.tree.nodes.is_empty() {
             stack.push(0);
         }
         while let Some(n) = stack.pop() {
             let node = &self.tree.nodes[n as usize];
-            let known = node_seen.get(n as usize).copied().unwrap_or(false);
+            let known = aimer.node_seen.get(n as usize).copied().unwrap_or(false);
             match node.kind {
                 NodeKind::Inner { left, right } => {
                     if !known
                         && self.hidden_node(
                             &a,
                             &node.bbox,
+                            hidden.as_ref(),
+                            &mut || false,
                             strips.as_mut(),
                             &mut scratch,
                             &mut stats,
                         )
                     {
+                        if let Some(h) = hidden.as_mut() {
+                            h.insert(&node.bbox);
+                        }
                         continue;
                     }
-                    stack.push(right);
-                    stack.push(left);
+                    // Front to back: the nearer child first, so that what it proves
+                    // hidden occludes the farther one.
+                    let d = |c: u32| gap2(&a, &self.tree.nodes[c as usize].bbox);
+                    if d(left) <= d(right) {
+                        stack.push(right);
+                        stack.push(left);
+                    } else {
+                        stack.push(left);
+                        stack.push(right);
+                    }
                 }
                 NodeKind::Leaf { first, len } => {
                     let items = self.tree.leaf_items(first, len);
@@ -301,27 +365,45 @@ impl DualRay {
                         && self.hidden_node(
                             &a,
                             &node.bbox,
+                            hidden.as_ref(),
+                            &mut || false,
                             strips.as_mut(),
                             &mut scratch,
                             &mut stats,
                         )
                     {
+                        if let Some(h) = hidden.as_mut() {
+                            h.insert(&node.bbox);
+                        }
                         continue;
                     }
                     for (id, b) in items {
                         if out.last() == Some(id) {
                             continue;
                         }
-                        let is_seen = seen.get(*id as usize).copied().unwrap_or(false);
+                        let is_seen = aimer.seen.get(*id as usize).copied().unwrap_or(false);
                         if is_seen
-                            || !self.hidden_node(&a, b, strips.as_mut(), &mut scratch, &mut stats)
+                            || !self.hidden_node(
+                                &a,
+                                b,
+                                hidden.as_ref(),
+                                &mut || aimer.object_visible(self, *id, b),
+                                strips.as_mut(),
+                                &mut scratch,
+                                &mut stats,
+                            )
                         {
                             out.push(*id);
+                        } else {
+                            if let Some(h) = hidden.as_mut() {
+                                h.insert(b);
+                            }
                         }
                     }
                 }
             }
         }
+        stats.hidden_boxes = hidden.as_ref().map_or(0, |h| h.boxes.len() as u64);
         for (_, vo) in strips
             .iter()
             .flat_map(|s| s.across_x.iter().chain(&s.across_y))
@@ -401,15 +483,18 @@ impl DualRay {
 
     /// A node's or an object's test from the cell `a`, with the cell's strips when
     /// given.
+    #[allow(clippy::too_many_arguments)]
     fn hidden_node(
         &self,
         a: &Aabb3,
         b: &Aabb3,
+        hidden: Option<&HiddenSet>,
+        aim: &mut dyn FnMut() -> bool,
         strips: Option<&mut Strips>,
         scratch: &mut Scratch,
         stats: &mut TraversalStats,
     ) -> bool {
-        self.hidden_first(a, b, None, strips, scratch, stats)
+        self.hidden_first(a, b, None, hidden, aim, strips, scratch, stats)
     }
 
     /// §3–§5: whether the boxes `a` (the cell) and `b` are hidden from each other, in
@@ -417,11 +502,14 @@ impl DualRay {
     /// larger gap): either axis hiding suffices, so the order changes only the cost.
     /// With `strips`, a long shaft the near occluders do not close is first tried
     /// strip by strip ([`Strips`]) before it is gathered whole.
+    #[allow(clippy::too_many_arguments)]
     fn hidden_first(
         &self,
         a: &Aabb3,
         b: &Aabb3,
         first: Option<Axis>,
+        hidden: Option<&HiddenSet>,
+        aim: &mut dyn FnMut() -> bool,
         mut strips: Option<&mut Strips>,
         scratch: &mut Scratch,
         stats: &mut TraversalStats,
@@ -437,6 +525,7 @@ impl DualRay {
         if first.map_or(gap_y > gap_x, |f| f == Axis::Y) {
             axes.swap(0, 1);
         }
+        let mut aimed = false;
         for (gap, axis) in axes {
             if gap <= 0.0 {
                 continue;
@@ -445,6 +534,7 @@ impl DualRay {
                 continue;
             };
             let decomp = self.decomposition(axis);
+            let hid = Hidden { set: hidden, axis };
             // First only the occluders next to the narrower box, where every ray of the
             // shaft converges: they often hide it on their own, at a fraction of the
             // cost (a subset covering is enough).
@@ -452,10 +542,11 @@ impl DualRay {
             let near = (len * FIRST_FRACTION).max(FIRST_MIN_M);
             if near < len {
                 let signed = if pair.narrow_lo() { near } else { -near };
-                Planar::build(scratch, decomp, &pair, Some(signed));
+                Planar::build(scratch, decomp, &pair, Some(signed), hid);
                 stats.planar_tests += 1;
                 stats.pieces += scratch.planar.pieces.len() as u64;
-                if witness::visible(scratch, decomp) {
+                stats.hidden_pieces += scratch.planar.hidden_pieces as u64;
+                if witness::visible(scratch, decomp, hid) {
                     stats.visible += 1;
                     stats.witnessed += 1;
                     continue;
@@ -468,6 +559,14 @@ impl DualRay {
                     stats.near_hidden += 1;
                     return true;
                 }
+                // Before the whole shaft: rays aimed at the box from the seed's eyes.
+                if !aimed {
+                    aimed = true;
+                    if aim() {
+                        stats.aimed += 1;
+                        return false;
+                    }
+                }
                 if let Some(st) = strips.as_deref_mut() {
                     if self.strips_hide(st, b, axis, scratch, stats) {
                         stats.vo_hidden += 1;
@@ -475,9 +574,10 @@ impl DualRay {
                     }
                 }
             }
-            Planar::build(scratch, decomp, &pair, None);
+            Planar::build(scratch, decomp, &pair, None, hid);
             stats.planar_tests += 1;
             stats.pieces += scratch.planar.pieces.len() as u64;
+            stats.hidden_pieces += scratch.planar.hidden_pieces as u64;
             let hidden = match self.planarity {
                 Planarity::Discrete { resolution_px } => discrete::hidden(scratch, resolution_px),
                 Planarity::Exact => exact::hidden(scratch),
@@ -510,7 +610,16 @@ impl DualRay {
         for (s, vo) in list.iter_mut() {
             let s = *s;
             let by_vo = vo.hides(m, |t, normal| {
-                self.hidden_first(&s, t, Some(normal), None, scratch, stats)
+                self.hidden_first(
+                    &s,
+                    t,
+                    Some(normal),
+                    None,
+                    &mut || false,
+                    None,
+                    scratch,
+                    stats,
+                )
             });
             if !by_vo && !self.near_hidden(&s, m, axis, scratch, stats) {
                 return false;
@@ -536,7 +645,7 @@ impl DualRay {
         let near = (len * FIRST_FRACTION).max(FIRST_MIN_M);
         let gather = (near < len).then_some(if pair.narrow_lo() { near } else { -near });
         let decomp = self.decomposition(axis);
-        Planar::build(scratch, decomp, &pair, gather);
+        Planar::build(scratch, decomp, &pair, gather, Hidden::NONE);
         stats.planar_tests += 1;
         stats.pieces += scratch.planar.pieces.len() as u64;
         match self.planarity {
@@ -608,6 +717,104 @@ impl Strips {
             across_y: cut(Axis::Y),
         }
     }
+}
+
+/// The parent of every kd-node and the leaves holding each of `objects` objects (CSR).
+fn node_links(tree: &KdTree, objects: usize) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
+    let mut parent = vec![u32::MAX; tree.nodes.len()];
+    let mut pairs: Vec<(u32, u32)> = Vec::new();
+    for (n, node) in tree.nodes.iter().enumerate() {
+        match node.kind {
+            NodeKind::Inner { left, right } => {
+                parent[left as usize] = n as u32;
+                parent[right as usize] = n as u32;
+            }
+            NodeKind::Leaf { first, len } => {
+                pairs.extend(
+                    tree.leaf_items(first, len)
+                        .iter()
+                        .map(|(id, _)| (*id, n as u32)),
+                );
+            }
+        }
+    }
+    pairs.sort_unstable();
+    pairs.dedup();
+    let mut start = vec![0u32; objects + 1];
+    for (id, _) in &pairs {
+        start[*id as usize + 1] += 1;
+    }
+    for i in 0..objects {
+        start[i + 1] += start[i];
+    }
+    (parent, start, pairs.into_iter().map(|(_, n)| n).collect())
+}
+
+/// The objects and kd-nodes of one cell known visible (met first by a seed ray), and the
+/// rays aimed at a box before its whole shaft is gathered ([`SeedGrid::aim`]): what
+/// they meet first is visible from the cell, so the box holding it is too, in both
+/// planar methods (the seed's argument), and the PVS does not change.
+struct Aimer {
+    eyes: Vec<DVec2>,
+    z: f64,
+    seen: Vec<bool>,
+    node_seen: Vec<bool>,
+    scratch: SeedScratch,
+}
+
+impl Aimer {
+    /// Aim at the box `b` of object `id` from every eye until the object is marked. The
+    /// other objects the rays meet first are marked too, with the kd-nodes above them.
+    fn object_visible(&mut self, m: &DualRay, id: u32, b: &Aabb3) -> bool {
+        if self.seen.is_empty() {
+            return false;
+        }
+        let (lo, hi) = (b.min.truncate(), b.max.truncate());
+        let mid = 0.5 * (lo + hi);
+        for k in 0..self.eyes.len() {
+            let eye = self.eyes[k];
+            // The middle of the box and of each of its sides facing the eye (a facade
+            // seen at a grazing angle along a street is entered through its own side).
+            let mut points = [Some(mid), None, None];
+            if eye.x < lo.x || eye.x > hi.x {
+                let x = if eye.x < lo.x { lo.x } else { hi.x };
+                points[1] = Some(DVec2::new(x, mid.y));
+            }
+            if eye.y < lo.y || eye.y > hi.y {
+                let y = if eye.y < lo.y { lo.y } else { hi.y };
+                points[2] = Some(DVec2::new(mid.x, y));
+            }
+            for at in points.into_iter().flatten() {
+                if m.seed
+                    .aim(eye, self.z, b, at, &mut self.seen, &mut self.scratch)
+                    == 0
+                {
+                    continue;
+                }
+                for &id in &self.scratch.marked {
+                    let (s, e) = (m.leaf_start[id as usize], m.leaf_start[id as usize + 1]);
+                    for &leaf in &m.leaf_ids[s as usize..e as usize] {
+                        let mut n = leaf;
+                        while n != u32::MAX && !self.node_seen[n as usize] {
+                            self.node_seen[n as usize] = true;
+                            n = m.parent[n as usize];
+                        }
+                    }
+                }
+                if self.seen[id as usize] {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+}
+
+/// Squared distance between the footprints of two boxes (0 when they overlap).
+fn gap2(a: &Aabb3, b: &Aabb3) -> f64 {
+    let dx = (b.min.x - a.max.x).max(a.min.x - b.max.x).max(0.0);
+    let dy = (b.min.y - a.max.y).max(a.min.y - b.max.y).max(0.0);
+    dx * dx + dy * dy
 }
 
 impl VisibilityMethod for DualRay {

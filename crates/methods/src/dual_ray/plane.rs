@@ -31,6 +31,7 @@
 //! `u ∈ [H_C(w0), G_C(w1)]` ([`Planar::piece_band`]). This is what makes the union
 //! coverage of `discrete` exact per row, without cracks.
 
+use super::hidden::{Cover, HiddenSet};
 use super::occluders::{Axis, Decomposition, Slab, Trap};
 use sightline_geom::{orient2d, Aabb3, DVec2, Orientation};
 
@@ -221,6 +222,8 @@ pub(crate) struct Planar {
     pub ceiling: Ceiling,
     pub ga: f64,
     pub gb: f64,
+    /// How many of `pieces` (the first ones) are hidden boxes.
+    pub hidden_pieces: usize,
 }
 
 impl Default for Rect {
@@ -264,6 +267,28 @@ pub(crate) struct Scratch {
     pub far: Vec<Piece>,
     /// Candidate rays `(gap width, u, w)`.
     pub candidates: Vec<(f64, f64, f64)>,
+    /// Per hidden box, the generation of the last test that took it as a piece.
+    pub hidden_stamp: Vec<u32>,
+    pub hidden_gen: u32,
+}
+
+/// The boxes proven hidden from the cell ([`HiddenSet`]), occluders of a test along
+/// `axis`.
+#[derive(Clone, Copy)]
+pub(crate) struct Hidden<'a> {
+    pub set: Option<&'a HiddenSet>,
+    pub axis: Axis,
+}
+
+impl Hidden<'_> {
+    pub(crate) const NONE: Hidden<'static> = Hidden {
+        set: None,
+        axis: Axis::X,
+    };
+
+    fn cover(&self) -> Option<&Cover> {
+        self.set.map(|s| s.cover(self.axis))
+    }
 }
 
 /// The rectangle of a box in `axis`-local coordinates, translated by `-origin`.
@@ -334,6 +359,7 @@ impl Planar {
         decomp: &Decomposition,
         pair: &Oriented,
         near: Option<f64>,
+        hidden: Hidden<'_>,
     ) {
         let Oriented {
             lo,
@@ -381,16 +407,17 @@ impl Planar {
         p.ceiling = ceiling;
         p.ga = ga;
         p.gb = gb;
+        p.hidden_pieces = 0;
 
         // Walk the grid columns between the faces, rows within the shaft's hull.
         let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
         let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
         walk_slabs(
             decomp,
-            &mut scratch.stamp,
-            gen,
+            (&mut scratch.stamp, gen),
             (ga, gb),
             &ceiling,
+            hidden.cover(),
             |cx0, cx1| (lower(cx0).min(lower(cx1)), upper(cx0).max(upper(cx1))),
             |slab, traps| {
                 cut_slab(
@@ -411,6 +438,53 @@ impl Planar {
         // Nearest the cell first: the coverage rows of `discrete` fill up early.
         if !cell_low {
             p.pieces.reverse();
+        }
+        // The hidden boxes over the whole shaft come first: few and large, they fill the
+        // coverage rows fastest.
+        if let Some(set) = hidden.set {
+            let real = p.pieces.len();
+            let stamps = &mut scratch.hidden_stamp;
+            if stamps.len() < set.boxes.len() {
+                stamps.resize(set.boxes.len(), 0);
+            }
+            scratch.hidden_gen = scratch.hidden_gen.wrapping_add(1);
+            if scratch.hidden_gen == 0 {
+                stamps.iter_mut().for_each(|s| *s = 0);
+                scratch.hidden_gen = 1;
+            }
+            let hgen = scratch.hidden_gen;
+            set.cover(hidden.axis).visit(
+                (xa, xb),
+                |cx0, cx1| (lower(cx0).min(lower(cx1)), upper(cx0).max(upper(cx1))),
+                |cx0, cx1| ceiling.at(cx0).min(ceiling.at(cx1)),
+                |id| {
+                    let st = &mut stamps[id as usize];
+                    if *st == hgen {
+                        return;
+                    }
+                    *st = hgen;
+                    let h = &set.boxes[id as usize];
+                    let r = local_rect(h, hidden.axis);
+                    let (cx0, cx1) = (r.x0.max(xa), r.x1.min(xb));
+                    if cx1 <= cx0 {
+                        return;
+                    }
+                    let Some((k0, k1)) = ceiling.below(h.max.z, cx0, cx1) else {
+                        return;
+                    };
+                    p.pieces.push(Piece {
+                        x0: k0 - xa,
+                        x1: k1 - xa,
+                        yb0: r.y0 - yc,
+                        yb1: r.y0 - yc,
+                        yt0: r.y1 - yc,
+                        yt1: r.y1 - yc,
+                    });
+                },
+            );
+            let extra = p.pieces.len() - real;
+            p.pieces.rotate_right(extra);
+            p.hidden_pieces = extra;
         }
         let len = p.len;
         p.duals.extend(p.pieces.iter().map(|q| DualPiece {
@@ -438,6 +512,7 @@ impl Planar {
     pub(crate) fn far_ray_clear(
         scratch: &mut Scratch,
         decomp: &Decomposition,
+        hidden: Hidden<'_>,
         u: f64,
         w: f64,
     ) -> bool {
@@ -457,10 +532,10 @@ impl Planar {
             }
             let clear = walk_slabs(
                 decomp,
-                &mut scratch.stamp,
-                gen,
+                (&mut scratch.stamp, gen),
                 (f0, f1),
                 &p.ceiling,
+                hidden.cover(),
                 |cx0, cx1| {
                     let (y0, y1) = (ray_y(cx0), ray_y(cx1));
                     (y0.min(y1) - margin, y0.max(y1) + margin)
@@ -597,13 +672,15 @@ fn hull_sections(lo: &Rect, hi: &Rect) -> (f64, f64, f64, f64) {
 /// grid columns over `[f0, f1]` whose rows meet `rows(cx0, cx1)` (a `y` range over the
 /// column's part `[cx0, cx1]`), until `visit` returns `false` (then `false`). A bucket
 /// whose tallest slab stays under `ceiling` over the column is skipped: a slab of it
-/// yields no piece there, and one reaching into other columns is visited there.
+/// yields no piece there, and one reaching into other columns is visited there. So is a
+/// bucket under the top of a hidden box of `cover` containing it: the box's own piece
+/// blocks every ray its slabs would (`super::hidden`).
 fn walk_slabs(
     decomp: &Decomposition,
-    stamp: &mut [u32],
-    gen: u32,
+    (stamp, gen): (&mut [u32], u32),
     (f0, f1): (f64, f64),
     ceiling: &Ceiling,
+    cover: Option<&Cover>,
     rows: impl Fn(f64, f64) -> (f64, f64),
     mut visit: impl FnMut(&Slab, &[Trap]) -> bool,
 ) -> bool {
@@ -614,7 +691,8 @@ fn walk_slabs(
         let (ylo, yhi) = rows(cx0, cx1);
         let floor = ceiling.at(cx0).min(ceiling.at(cx1));
         for r in g.row(ylo)..=g.row(yhi) {
-            if decomp.bucket_top[r * g.nx + c] <= floor {
+            let top = decomp.bucket_top[r * g.nx + c];
+            if top <= floor || cover.is_some_and(|cv| top <= cv.top_of_bucket(c, r)) {
                 continue;
             }
             for &id in g.bucket(c, r) {

@@ -19,7 +19,7 @@
 use super::discrete::{touch_interval, touch_row, COLUMNS};
 use super::exact::ray_is_clear;
 use super::occluders::Decomposition;
-use super::plane::{Planar, Scratch};
+use super::plane::{Hidden, Planar, Scratch};
 
 /// Rows of `RS` sampled for candidate gaps.
 const SAMPLES: u32 = 8;
@@ -30,7 +30,7 @@ const TRIES: usize = 1;
 
 /// `true` when a verified clear ray joins the two boxes of the planar problem in
 /// `scratch`, whose pieces are those of `[ga, gb]` only.
-pub(crate) fn visible(scratch: &mut Scratch, decomp: &Decomposition) -> bool {
+pub(crate) fn visible(scratch: &mut Scratch, decomp: &Decomposition, hidden: Hidden<'_>) -> bool {
     gather_candidates(scratch);
     let mut tried = 0;
     while tried < TRIES {
@@ -38,7 +38,9 @@ pub(crate) fn visible(scratch: &mut Scratch, decomp: &Decomposition) -> bool {
             return false;
         };
         tried += 1;
-        if ray_is_clear(&scratch.planar, u, w) && Planar::far_ray_clear(scratch, decomp, u, w) {
+        if ray_is_clear(&scratch.planar, u, w)
+            && Planar::far_ray_clear(scratch, decomp, hidden, u, w)
+        {
             return true;
         }
     }
@@ -118,13 +120,13 @@ mod tests {
                     let decomp = m.decomposition(axis);
                     let len = pair.len();
                     let near = if pair.cell_low { 0.3 * len } else { -0.3 * len };
-                    Planar::build(&mut scratch, decomp, &pair, Some(near));
+                    Planar::build(&mut scratch, decomp, &pair, Some(near), Hidden::NONE);
                     tried += 1;
-                    if !visible(&mut scratch, decomp) {
+                    if !visible(&mut scratch, decomp, Hidden::NONE) {
                         continue;
                     }
                     witnessed += 1;
-                    Planar::build(&mut scratch, decomp, &pair, None);
+                    Planar::build(&mut scratch, decomp, &pair, None, Hidden::NONE);
                     for res in [16, 128] {
                         assert!(!discrete::hidden(&mut scratch, res), "{c:?} {b:?} {res}");
                     }
