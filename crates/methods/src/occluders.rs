@@ -125,11 +125,12 @@ impl BucketGrid {
 
     #[inline]
     pub(crate) fn col(&self, x: f64) -> usize {
-        (((x - self.origin.x) / self.cell_m).floor().max(0.0) as usize).min(self.nx - 1)
+        // `as` saturates: below the origin (and NaN) is column 0, as floor-then-clamp.
+        (((x - self.origin.x) / self.cell_m) as usize).min(self.nx - 1)
     }
     #[inline]
     pub(crate) fn row(&self, y: f64) -> usize {
-        (((y - self.origin.y) / self.cell_m).floor().max(0.0) as usize).min(self.ny - 1)
+        (((y - self.origin.y) / self.cell_m) as usize).min(self.ny - 1)
     }
     #[inline]
     pub(crate) fn bucket(&self, c: usize, r: usize) -> &[u32] {

@@ -94,12 +94,13 @@ impl Cover {
 
     #[inline]
     fn col(&self, x: f64) -> usize {
-        (((x - self.origin.x) / self.cell_m).floor().max(0.0) as usize).min(self.nx - 1)
+        // `as` saturates: below the origin (and NaN) is column 0, as floor-then-clamp.
+        (((x - self.origin.x) / self.cell_m) as usize).min(self.nx - 1)
     }
 
     #[inline]
     fn row(&self, y: f64) -> usize {
-        (((y - self.origin.y) / self.cell_m).floor().max(0.0) as usize).min(self.ny - 1)
+        (((y - self.origin.y) / self.cell_m) as usize).min(self.ny - 1)
     }
 
     /// Visit the boxes covering the cells over `[x0, x1]` whose rows meet `rows(cx0,

@@ -534,7 +534,11 @@ impl DualRay {
                 continue;
             };
             let decomp = self.decomposition(axis);
-            let hid = Hidden { set: hidden, axis };
+            let mut hid = Hidden {
+                set: hidden,
+                axis,
+                reuse: false,
+            };
             // First only the occluders next to the narrower box, where every ray of the
             // shaft converges: they often hide it on their own, at a fraction of the
             // cost (a subset covering is enough).
@@ -574,6 +578,8 @@ impl DualRay {
                     }
                 }
             }
+            // The near shaft just built (if any) is this one: same hidden pieces.
+            hid.reuse = near < len;
             Planar::build(scratch, decomp, &pair, None, hid);
             stats.planar_tests += 1;
             stats.pieces += scratch.planar.pieces.len() as u64;

@@ -270,6 +270,8 @@ pub(crate) struct Scratch {
     /// Per hidden box, the generation of the last test that took it as a piece.
     pub hidden_stamp: Vec<u32>,
     pub hidden_gen: u32,
+    /// The pieces of the hidden boxes of the last shaft built.
+    pub hidden_pieces: Vec<Piece>,
 }
 
 /// The boxes proven hidden from the cell ([`HiddenSet`]), occluders of a test along
@@ -278,12 +280,16 @@ pub(crate) struct Scratch {
 pub(crate) struct Hidden<'a> {
     pub set: Option<&'a HiddenSet>,
     pub axis: Axis,
+    /// The previous build of the scratch was the same shaft with the same set: its
+    /// hidden pieces are taken again.
+    pub reuse: bool,
 }
 
 impl Hidden<'_> {
     pub(crate) const NONE: Hidden<'static> = Hidden {
         set: None,
         axis: Axis::X,
+        reuse: false,
     };
 
     fn cover(&self) -> Option<&Cover> {
@@ -442,47 +448,51 @@ impl Planar {
         // The hidden boxes over the whole shaft come first: few and large, they fill the
         // coverage rows fastest.
         if let Some(set) = hidden.set {
-            let real = p.pieces.len();
-            let stamps = &mut scratch.hidden_stamp;
-            if stamps.len() < set.boxes.len() {
-                stamps.resize(set.boxes.len(), 0);
+            let cache = &mut scratch.hidden_pieces;
+            if !hidden.reuse {
+                cache.clear();
+                let stamps = &mut scratch.hidden_stamp;
+                if stamps.len() < set.boxes.len() {
+                    stamps.resize(set.boxes.len(), 0);
+                }
+                scratch.hidden_gen = scratch.hidden_gen.wrapping_add(1);
+                if scratch.hidden_gen == 0 {
+                    stamps.iter_mut().for_each(|s| *s = 0);
+                    scratch.hidden_gen = 1;
+                }
+                let hgen = scratch.hidden_gen;
+                set.cover(hidden.axis).visit(
+                    (xa, xb),
+                    |cx0, cx1| (lower(cx0).min(lower(cx1)), upper(cx0).max(upper(cx1))),
+                    |cx0, cx1| ceiling.at(cx0).min(ceiling.at(cx1)),
+                    |id| {
+                        let st = &mut stamps[id as usize];
+                        if *st == hgen {
+                            return;
+                        }
+                        *st = hgen;
+                        let h = &set.boxes[id as usize];
+                        let r = local_rect(h, hidden.axis);
+                        let (cx0, cx1) = (r.x0.max(xa), r.x1.min(xb));
+                        if cx1 <= cx0 {
+                            return;
+                        }
+                        let Some((k0, k1)) = ceiling.below(h.max.z, cx0, cx1) else {
+                            return;
+                        };
+                        cache.push(Piece {
+                            x0: k0 - xa,
+                            x1: k1 - xa,
+                            yb0: r.y0 - yc,
+                            yb1: r.y0 - yc,
+                            yt0: r.y1 - yc,
+                            yt1: r.y1 - yc,
+                        });
+                    },
+                );
             }
-            scratch.hidden_gen = scratch.hidden_gen.wrapping_add(1);
-            if scratch.hidden_gen == 0 {
-                stamps.iter_mut().for_each(|s| *s = 0);
-                scratch.hidden_gen = 1;
-            }
-            let hgen = scratch.hidden_gen;
-            set.cover(hidden.axis).visit(
-                (xa, xb),
-                |cx0, cx1| (lower(cx0).min(lower(cx1)), upper(cx0).max(upper(cx1))),
-                |cx0, cx1| ceiling.at(cx0).min(ceiling.at(cx1)),
-                |id| {
-                    let st = &mut stamps[id as usize];
-                    if *st == hgen {
-                        return;
-                    }
-                    *st = hgen;
-                    let h = &set.boxes[id as usize];
-                    let r = local_rect(h, hidden.axis);
-                    let (cx0, cx1) = (r.x0.max(xa), r.x1.min(xb));
-                    if cx1 <= cx0 {
-                        return;
-                    }
-                    let Some((k0, k1)) = ceiling.below(h.max.z, cx0, cx1) else {
-                        return;
-                    };
-                    p.pieces.push(Piece {
-                        x0: k0 - xa,
-                        x1: k1 - xa,
-                        yb0: r.y0 - yc,
-                        yb1: r.y0 - yc,
-                        yt0: r.y1 - yc,
-                        yt1: r.y1 - yc,
-                    });
-                },
-            );
-            let extra = p.pieces.len() - real;
+            let extra = cache.len();
+            p.pieces.extend_from_slice(cache);
             p.pieces.rotate_right(extra);
             p.hidden_pieces = extra;
         }
