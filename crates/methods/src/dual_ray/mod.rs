@@ -42,10 +42,11 @@
 //!   cell); they only drop provably hidden nodes.
 //!
 //! Order of one box-to-box test along an axis: the occluders next to the narrower box
-//! are gathered first, with the hidden boxes over the whole shaft; a witness ray from
-//! their gaps, checked along its own line through the rest of the shaft, settles
-//! "visible"; else their coverage may already settle "hidden"; for an object, rays aimed
-//! at it may settle "visible"; only then is the whole shaft gathered and tested.
+//! are gathered first, with the hidden boxes over the whole shaft; their coverage may
+//! already settle "hidden"; else a witness ray from their gaps, checked along its own
+//! line through the rest of the shaft, settles "visible" for this axis; for an object,
+//! rays aimed at it may settle "visible"; only then is the whole shaft gathered and
+//! tested.
 //!
 //! Degenerate configurations: boxes overlapping in both x and y (the cell inside a
 //! node, an object straddling the cell) have no separating planes and count as visible;
@@ -550,11 +551,6 @@ impl DualRay {
                 stats.planar_tests += 1;
                 stats.pieces += scratch.planar.pieces.len() as u64;
                 stats.hidden_pieces += scratch.planar.hidden_pieces as u64;
-                if witness::visible(scratch, decomp, hid) {
-                    stats.visible += 1;
-                    stats.witnessed += 1;
-                    continue;
-                }
                 let res = match self.planarity {
                     Planarity::Discrete { resolution_px } => resolution_px,
                     Planarity::Exact => discrete::FIRST_LEVEL * 16,
@@ -562,6 +558,11 @@ impl DualRay {
                 if discrete::hidden(scratch, res) {
                     stats.near_hidden += 1;
                     return true;
+                }
+                if witness::visible(scratch, decomp, hid) {
+                    stats.visible += 1;
+                    stats.witnessed += 1;
+                    continue;
                 }
                 // Before the whole shaft: rays aimed at the box from the seed's eyes.
                 if !aimed {
