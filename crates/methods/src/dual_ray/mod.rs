@@ -31,10 +31,11 @@
 //!   without a test, and so are the kd-nodes holding them (it changes no PVS);
 //! * `witness` — a single ray verified clear (exact predicates) answers "visible"
 //!   without gathering the whole shaft; it changes no answer of either planar method;
-//! * aimed rays — an object the near occluders do not hide is aimed at by seed rays
-//!   from the cell's eyes through its middle and its sides facing them
-//!   (`crate::seed`'s march, stopping past the object): met first, it is visible, and
-//!   its whole shaft is not gathered (no PVS changes: the seed's argument);
+//! * aimed rays — a node or object the near occluders do not hide is aimed at by seed
+//!   rays from the cell's eyes through the middle of its box and of its sides facing
+//!   them (`crate::seed`'s march, stopping past the box): an object they meet first is
+//!   visible, so is every node holding it, and the whole shaft is not gathered (no PVS
+//!   changes: the seed's argument);
 //! * `vo` — virtual occluders (Koltun et al. 2000), opt-in
 //!   ([`DualRay::with_virtual_occluders`]): a long shaft the near occluders do not
 //!   close is tried strip by strip of the cell, each strip with vertical rectangles on
@@ -150,8 +151,8 @@ pub struct TraversalStats {
     pub hidden_boxes: u64,
     /// Pieces of the planar problems that were hidden boxes.
     pub hidden_pieces: u64,
-    /// Boxes found visible by rays aimed at them (`crate::seed`), before their whole
-    /// shaft was gathered.
+    /// Boxes (nodes and objects) found visible by rays aimed at them (`crate::seed`),
+    /// before their whole shaft was gathered.
     pub aimed: u64,
     /// Axis tests hidden strip by strip (the cell cut into strips, each with its own
     /// virtual occluders), without the whole shaft.
@@ -336,7 +337,9 @@ impl DualRay {
                             &a,
                             &node.bbox,
                             hidden.as_ref(),
-                            &mut || false,
+                            &mut || {
+                                aimer.box_visible(self, &node.bbox, |s| s.node_seen[n as usize])
+                            },
                             strips.as_mut(),
                             &mut scratch,
                             &mut stats,
@@ -367,7 +370,9 @@ impl DualRay {
                             &a,
                             &node.bbox,
                             hidden.as_ref(),
-                            &mut || false,
+                            &mut || {
+                                aimer.box_visible(self, &node.bbox, |s| s.node_seen[n as usize])
+                            },
                             strips.as_mut(),
                             &mut scratch,
                             &mut stats,
@@ -773,6 +778,16 @@ impl Aimer {
     /// Aim at the box `b` of object `id` from every eye until the object is marked. The
     /// other objects the rays meet first are marked too, with the kd-nodes above them.
     fn object_visible(&mut self, m: &DualRay, id: u32, b: &Aabb3) -> bool {
+        self.box_visible(m, b, |s| s.seen[id as usize])
+    }
+
+    /// Aim at the box of node `n` until it holds a marked object.
+    fn node_visible(&mut self, m: &DualRay, n: u32, b: &Aabb3) -> bool {
+        self.box_visible(m, b, |s| s.node_seen[n as usize])
+    }
+
+    /// Aim at `b` from every eye until `done`.
+    fn box_visible(&mut self, m: &DualRay, b: &Aabb3, done: impl Fn(&Aimer) -> bool) -> bool {
         if self.seen.is_empty() {
             return false;
         }
@@ -808,7 +823,7 @@ impl Aimer {
                         }
                     }
                 }
-                if self.seen[id as usize] {
+                if done(self) {
                     return true;
                 }
             }
