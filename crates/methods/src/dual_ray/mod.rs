@@ -337,9 +337,7 @@ impl DualRay {
                             &a,
                             &node.bbox,
                             hidden.as_ref(),
-                            &mut || {
-                                aimer.box_visible(self, &node.bbox, |s| s.node_seen[n as usize])
-                            },
+                            &mut || aimer.node_visible(self, n, &node.bbox),
                             strips.as_mut(),
                             &mut scratch,
                             &mut stats,
@@ -370,9 +368,7 @@ impl DualRay {
                             &a,
                             &node.bbox,
                             hidden.as_ref(),
-                            &mut || {
-                                aimer.box_visible(self, &node.bbox, |s| s.node_seen[n as usize])
-                            },
+                            &mut || aimer.node_visible(self, n, &node.bbox),
                             strips.as_mut(),
                             &mut scratch,
                             &mut stats,
