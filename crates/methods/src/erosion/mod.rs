@@ -347,8 +347,9 @@ impl ErosionMethod {
                         .entry((id, k))
                         .or_insert_with(|| rays::x_sampling(&top.ring, ctx.half, ctx.s))
                         .as_ref()?;
-                    let parts: Vec<(Vec<DVec2>, bool)> =
-                        samples.iter().map(|&p| (vec![p - ctx.s], false)).collect();
+                    let points: Vec<[DVec2; 1]> = samples.iter().map(|&p| [p - ctx.s]).collect();
+                    let parts: Vec<(&[DVec2], bool)> =
+                        points.iter().map(|p| (&p[..], false)).collect();
                     tests.push(Test {
                         element: Element::Cell,
                         target: Target::new(&ctx.bins, &parts),
@@ -383,7 +384,7 @@ impl ErosionMethod {
                             Region::Side(el) => {
                                 let target = if self.variant == Variant::Full {
                                     let [a, b] = shrink::shrunk_side(el, &piece, ctx.rect);
-                                    Target::new(&ctx.bins, &[(vec![a - ctx.s, b - ctx.s], false)])
+                                    Target::new(&ctx.bins, &[(&[a - ctx.s, b - ctx.s], false)])
                                 } else {
                                     ctx.target_ring(&piece.ring, el.midpoint(ctx.half))
                                 };
@@ -414,12 +415,12 @@ impl ErosionMethod {
                                             .iter()
                                             .filter(|segs| !segs.is_empty())
                                             .map(|segs| {
-                                                let parts: Vec<(Vec<DVec2>, bool)> = segs
+                                                let rel: Vec<[DVec2; 2]> = segs
                                                     .iter()
-                                                    .map(|[a, b]| {
-                                                        (vec![*a - ctx.s, *b - ctx.s], false)
-                                                    })
+                                                    .map(|[a, b]| [*a - ctx.s, *b - ctx.s])
                                                     .collect();
+                                                let parts: Vec<(&[DVec2], bool)> =
+                                                    rel.iter().map(|s| (&s[..], false)).collect();
                                                 Target::new(&ctx.bins, &parts)
                                             })
                                             .collect()
@@ -640,7 +641,7 @@ impl CellCtx {
     /// A closed ring translated by `-shift`, relative to the eye.
     fn target_ring(&self, ring: &[DVec2], shift: DVec2) -> Target {
         let pts: Vec<DVec2> = ring.iter().map(|v| *v - shift - self.s).collect();
-        Target::new(&self.bins, &[(pts, true)])
+        Target::new(&self.bins, &[(&pts, true)])
     }
 }
 

@@ -46,7 +46,8 @@ pub struct Bins {
     pub n: usize,
     width: f64,
     dirs: Arc<[DVec2]>,
-    mids: Arc<[DVec2]>,
+    /// The middle direction of bin 0.
+    mid0: DVec2,
 }
 
 impl Bins {
@@ -60,21 +61,21 @@ impl Bins {
                 .map(|k| DVec2::from_angle(k as f64 * width))
                 .collect::<Vec<_>>()
                 .into(),
-            mids: (0..n)
-                .map(|k| DVec2::from_angle((k as f64 + 0.5) * width))
-                .collect::<Vec<_>>()
-                .into(),
+            mid0: DVec2::from_angle(0.5 * width),
         }
     }
 
     /// Visit every bin met by the segment `pa → pb` (relative to the eye), with the
-    /// radial range of the part of the segment inside the bin's wedge (widened a
-    /// little: conservative for both uses) and whether the bin's middle ray crosses it.
+    /// nearest distance of the part of the segment inside the bin's wedge (lowered a
+    /// little: conservative) and, in bin 0, whether its middle ray crosses the segment
+    /// (the inside test of closed rings).
+    ///
+    /// Each end comes with its azimuth (`atan2`), computed once per vertex by the caller.
     fn edge(
         &self,
-        pa: DVec2,
-        pb: DVec2,
-        mut f: impl FnMut(usize, f64, f64, bool),
+        (pa, ta): (DVec2, f64),
+        (pb, tb): (DVec2, f64),
+        mut f: impl FnMut(usize, f64, bool),
     ) -> Result<(), ThroughEye> {
         let d = pb - pa;
         let len2 = d.length_squared();
@@ -88,7 +89,6 @@ impl Bins {
         if (pa + d * t).length() <= 1e-9 * scale {
             return Err(ThroughEye);
         }
-        let (ta, tb) = (pa.y.atan2(pa.x), pb.y.atan2(pb.x));
         let (lo, mut hi) = if pa.perp_dot(pb) >= 0.0 {
             (ta, tb)
         } else {
@@ -126,7 +126,6 @@ impl Bins {
                 continue;
             }
             let (q0, q1) = (pa + d * s0, pa + d * s1);
-            let hi_r = q0.length().max(q1.length()) + EPS_M;
             let e = q1 - q0;
             let el2 = e.length_squared();
             let u = if el2 > 0.0 {
@@ -135,16 +134,13 @@ impl Bins {
                 0.0
             };
             let lo_r = ((q0 + e * u).length() - EPS_M).max(0.0);
-            // Does the middle ray of the bin cross the edge (half-open rule)?
-            let m = self.mids[bin];
-            let (sa, sb) = (m.perp_dot(pa), m.perp_dot(pb));
-            let crosses = if (sa > 0.0) != (sb > 0.0) {
-                let u = sa / (sa - sb);
-                (pa + d * u).dot(m) > 0.0
-            } else {
-                false
+            // Does the middle ray of bin 0 cross the edge (half-open rule)?
+            let crosses = bin == 0 && {
+                let m = self.mid0;
+                let (sa, sb) = (m.perp_dot(pa), m.perp_dot(pb));
+                (sa > 0.0) != (sb > 0.0) && (pa + d * (sa / (sa - sb))).dot(m) > 0.0
             };
-            f(bin, lo_r, hi_r, crosses);
+            f(bin, lo_r, crosses);
         }
         Ok(())
     }
@@ -162,47 +158,99 @@ pub struct Target {
 impl Target {
     /// A target made of closed rings (polygon) or open polylines (`closed = false`),
     /// in coordinates relative to the eye.
-    pub fn new(bins: &Bins, parts: &[(Vec<DVec2>, bool)]) -> Self {
-        let mut hits: Vec<(usize, f64)> = Vec::new();
-        let mut at_eye = false;
-        let mut crossings = 0usize;
-        for (pts, closed) in parts {
-            let n = pts.len();
-            if n == 0 {
-                continue;
-            }
-            if n == 1 {
-                // A single point: a zero-length segment.
-                if bins
-                    .edge(pts[0], pts[0], |b, lo, _, _| hits.push((b, lo)))
-                    .is_err()
-                {
-                    at_eye = true;
+    pub fn new(bins: &Bins, parts: &[(&[DVec2], bool)]) -> Self {
+        NEAREST.with_borrow_mut(|near| {
+            near.start(bins.n);
+            let mut at_eye = false;
+            let mut crossings = 0usize;
+            for &(pts, closed) in parts {
+                let n = pts.len();
+                if n == 0 {
+                    continue;
                 }
-                continue;
-            }
-            let m = if *closed { n } else { n - 1 };
-            for i in 0..m {
-                let (a, b) = (pts[i], pts[(i + 1) % n]);
-                let r = bins.edge(a, b, |bin, lo, _, crosses| {
-                    hits.push((bin, lo));
-                    if *closed && bin == 0 && crosses {
-                        crossings += 1;
+                if n == 1 {
+                    // A single point: a zero-length segment.
+                    let p = pts[0];
+                    let a = p.y.atan2(p.x);
+                    if bins
+                        .edge((p, a), (p, a), |b, lo, _| near.hit(b, lo))
+                        .is_err()
+                    {
+                        at_eye = true;
                     }
-                });
-                if r.is_err() {
-                    at_eye = true;
+                    continue;
+                }
+                let angle = |p: DVec2| p.y.atan2(p.x);
+                let m = if closed { n } else { n - 1 };
+                let mut a = (pts[0], angle(pts[0]));
+                for i in 0..m {
+                    let q = pts[(i + 1) % n];
+                    let b = (q, angle(q));
+                    let r = bins.edge(a, b, |bin, lo, crosses| {
+                        near.hit(bin, lo);
+                        if closed && crosses {
+                            crossings += 1;
+                        }
+                    });
+                    if r.is_err() {
+                        at_eye = true;
+                    }
+                    a = b;
                 }
             }
+            // Eye inside a closed part: odd number of crossings of bin 0's middle ray
+            // (counted over all closed parts; parts are disjoint pieces of one object).
+            if crossings % 2 == 1 {
+                at_eye = true;
+            }
+            Target {
+                bins: near.finish(),
+                at_eye,
+            }
+        })
+    }
+}
+
+/// Per-thread scratch of [`Target::new`]: the nearest distance met in each bin so far
+/// (∞: none) and the bins met, so that a target's bins come out sorted and deduplicated
+/// without sorting its hits.
+#[derive(Default)]
+struct Nearest {
+    rho: Vec<f64>,
+    met: Vec<u32>,
+}
+
+thread_local! {
+    static NEAREST: std::cell::RefCell<Nearest> = std::cell::RefCell::new(Nearest::default());
+}
+
+impl Nearest {
+    fn start(&mut self, n: usize) {
+        if self.rho.len() < n {
+            self.rho.resize(n, f64::INFINITY);
         }
-        // Eye inside a closed part: odd number of crossings of bin 0's middle ray
-        // (counted over all closed parts; parts are disjoint pieces of one object).
-        if crossings % 2 == 1 {
-            at_eye = true;
+        self.met.clear();
+    }
+
+    #[inline]
+    fn hit(&mut self, bin: usize, rho: f64) {
+        let r = &mut self.rho[bin];
+        if *r == f64::INFINITY {
+            self.met.push(bin as u32);
         }
-        hits.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
-        hits.dedup_by(|later, first| later.0 == first.0);
-        Target { bins: hits, at_eye }
+        *r = r.min(rho);
+    }
+
+    /// `(bin, nearest)` of every bin met, by bin; the scratch is left clean.
+    fn finish(&mut self) -> Vec<(usize, f64)> {
+        self.met.sort_unstable();
+        self.met
+            .iter()
+            .map(|&b| {
+                let rho = std::mem::replace(&mut self.rho[b as usize], f64::INFINITY);
+                (b as usize, rho)
+            })
+            .collect()
     }
 }
 
@@ -564,7 +612,7 @@ mod tests {
     }
 
     fn target(bins: &Bins, r: Vec<DVec2>) -> Target {
-        Target::new(bins, &[(r, true)])
+        Target::new(bins, &[(&r, true)])
     }
 
     #[test]
