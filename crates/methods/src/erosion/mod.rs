@@ -23,9 +23,10 @@
 //!   shrunk occludee (§4.4) and the eye raise that makes §3.3 hold in 3D.
 //! * [`rays`]: the X-sampling of occludees for `erosion-rays` (§7.1).
 //! * [`occlusion`]: the from-centre test (§5) on a polar occlusion map: eroded
-//!   occluders marched front to back along each needed direction with the inner rule
-//!   and farthest depth, stopping once the horizon is closed (§7 "Scaling"); occludees
-//!   with outer coverage and nearest depth.
+//!   occluders marched front to back with the inner rule and farthest depth, lazily:
+//!   each direction only as far as the tests asked of it need, each test only until
+//!   its answer is known (§7 "Scaling"); occludees with outer coverage and nearest
+//!   depth.
 //! * [`crate::seed`]: objects met first by exact rays from a few eyes of the cell are
 //!   in the PVS without a test (the erosion would keep them anyway; no PVS changes).
 //!
@@ -64,7 +65,7 @@ use sightline_geom::{Aabb2, Aabb3, DVec2, ViewCell};
 use sightline_scene::Scene;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
-use tiles::TiledErosion;
+use tiles::{Occluders, TiledErosion};
 
 /// Cells are refined into quarters at most this many times (see `refine`). On real
 /// street cells the size of the last quarters decides the tightness more than any
@@ -171,13 +172,34 @@ impl Eroded {
     }
 }
 
+impl Occluders for Eroded {
+    fn pixel_m(&self) -> f64 {
+        match self {
+            Eroded::Whole(p) => p.pixel_m(),
+            Eroded::Tiled(t) => t.pixel_m(),
+        }
+    }
+    fn min_over(&self, r: Aabb2) -> u16 {
+        match self {
+            Eroded::Whole(p) => Occluders::min_over(p, r),
+            Eroded::Tiled(t) => t.min_over(r),
+        }
+    }
+    fn max_at_most(&self, r: Aabb2, limit: u16) -> bool {
+        match self {
+            Eroded::Whole(p) => p.max_at_most(r, limit),
+            Eroded::Tiled(t) => t.max_at_most(r, limit),
+        }
+    }
+}
+
 /// X-samplings of one (sub-)cell per (object, top face) (None: keep the object).
 type SampleMemo = HashMap<(usize, usize), Option<Vec<DVec2>>>;
 
 /// What one pass of [`ErosionMethod::decide`] shares with the others: the maps of the
 /// coarser pass (seeds of the new maps) and the X-samplings.
 struct Pass<'a> {
-    seeds: Option<&'a HashMap<Element, PolarMap>>,
+    seeds: Option<HashMap<Element, PolarMap>>,
     memo: &'a mut SampleMemo,
 }
 
@@ -325,8 +347,9 @@ impl ErosionMethod {
                         .entry((id, k))
                         .or_insert_with(|| rays::x_sampling(&top.ring, ctx.half, ctx.s))
                         .as_ref()?;
-                    let parts: Vec<(Vec<DVec2>, bool)> =
-                        samples.iter().map(|&p| (vec![p - ctx.s], false)).collect();
+                    let points: Vec<[DVec2; 1]> = samples.iter().map(|&p| [p - ctx.s]).collect();
+                    let parts: Vec<(&[DVec2], bool)> =
+                        points.iter().map(|p| (&p[..], false)).collect();
                     tests.push(Test {
                         element: Element::Cell,
                         target: Target::new(&ctx.bins, &parts),
@@ -361,7 +384,7 @@ impl ErosionMethod {
                             Region::Side(el) => {
                                 let target = if self.variant == Variant::Full {
                                     let [a, b] = shrink::shrunk_side(el, &piece, ctx.rect);
-                                    Target::new(&ctx.bins, &[(vec![a - ctx.s, b - ctx.s], false)])
+                                    Target::new(&ctx.bins, &[(&[a - ctx.s, b - ctx.s], false)])
                                 } else {
                                     ctx.target_ring(&piece.ring, el.midpoint(ctx.half))
                                 };
@@ -392,12 +415,12 @@ impl ErosionMethod {
                                             .iter()
                                             .filter(|segs| !segs.is_empty())
                                             .map(|segs| {
-                                                let parts: Vec<(Vec<DVec2>, bool)> = segs
+                                                let rel: Vec<[DVec2; 2]> = segs
                                                     .iter()
-                                                    .map(|[a, b]| {
-                                                        (vec![*a - ctx.s, *b - ctx.s], false)
-                                                    })
+                                                    .map(|[a, b]| [*a - ctx.s, *b - ctx.s])
                                                     .collect();
+                                                let parts: Vec<(&[DVec2], bool)> =
+                                                    rel.iter().map(|s| (&s[..], false)).collect();
                                                 Target::new(&ctx.bins, &parts)
                                             })
                                             .collect()
@@ -525,7 +548,7 @@ impl ErosionMethod {
             &mut maybe,
             visible,
             Pass {
-                seeds: Some(&coarse_maps),
+                seeds: Some(coarse_maps),
                 memo: &mut memo,
             },
         );
@@ -546,7 +569,7 @@ impl ErosionMethod {
         visible: &mut Vec<u32>,
         pass: Pass<'_>,
     ) -> HashMap<Element, PolarMap> {
-        let Pass { seeds, memo } = pass;
+        let Pass { mut seeds, memo } = pass;
         let ctx = CellCtx {
             rect,
             half: rect.size() * 0.5,
@@ -564,36 +587,32 @@ impl ErosionMethod {
                 Some(t) => pending.push((id, t)),
             }
         }
-        // One map per element, rasterized only in the bins some test needs.
-        let mut maps: HashMap<Element, PolarMap> = HashMap::new();
+        // One map per element, marched lazily by the tests (`PolarMap`).
+        let mut maps: HashMap<Element, (PolarMap, Arc<Eroded>)> = HashMap::new();
         for (_, tests) in &pending {
             for t in tests {
-                maps.entry(t.element)
-                    .or_insert_with(|| match seeds.and_then(|s| s.get(&t.element)) {
+                let (map, _) = maps.entry(t.element).or_insert_with(|| {
+                    let map = match seeds.as_mut().and_then(|s| s.remove(&t.element)) {
                         Some(coarse) => PolarMap::seeded(ctx.bins.clone(), coarse),
                         None => PolarMap::new(ctx.bins.clone()),
-                    })
-                    .need(&t.target, t.eye, t.t);
-                if let Some(m) = maps.get_mut(&t.element) {
-                    for a in &t.alts {
-                        m.need(a, t.eye, t.t);
-                    }
+                    };
+                    (map, self.eroded(t.element, ctx.half, ctx.fill_dm))
+                });
+                map.need(&t.target, t.eye);
+                for a in &t.alts {
+                    map.need(a, t.eye);
                 }
-            }
-        }
-        let mut elements: Vec<Element> = maps.keys().copied().collect();
-        elements.sort();
-        for el in elements {
-            if let Some(map) = maps.get_mut(&el) {
-                self.render(map, el, &ctx);
             }
         }
         undecided.clear();
         for (id, tests) in pending {
             let hidden = tests.iter().all(|t| {
-                maps.get(&t.element).is_some_and(|m| {
-                    m.hidden(&t.target, t.eye, t.t)
-                        || t.alts.iter().any(|a| m.hidden(a, t.eye, t.t))
+                maps.get_mut(&t.element).is_some_and(|(m, occ)| {
+                    let occ = &**occ;
+                    m.hidden(occ, ctx.s, &t.target, t.eye, t.t, 0)
+                        || t.alts
+                            .iter()
+                            .any(|a| m.hidden(occ, ctx.s, a, t.eye, t.t, 0))
                 })
             });
             if hidden {
@@ -602,15 +621,7 @@ impl ErosionMethod {
                 visible.push(id);
             }
         }
-        maps
-    }
-
-    /// Build the occlusion map of `element` from the cell centre.
-    fn render(&self, map: &mut PolarMap, element: Element, ctx: &CellCtx) {
-        match &*self.eroded(element, ctx.half, ctx.fill_dm) {
-            Eroded::Whole(p) => map.march(p, ctx.s),
-            Eroded::Tiled(t) => map.march(t, ctx.s),
-        }
+        maps.into_iter().map(|(el, (m, _))| (el, m)).collect()
     }
 }
 
@@ -630,7 +641,7 @@ impl CellCtx {
     /// A closed ring translated by `-shift`, relative to the eye.
     fn target_ring(&self, ring: &[DVec2], shift: DVec2) -> Target {
         let pts: Vec<DVec2> = ring.iter().map(|v| *v - shift - self.s).collect();
-        Target::new(&self.bins, &[(pts, true)])
+        Target::new(&self.bins, &[(&pts, true)])
     }
 }
 

@@ -46,7 +46,8 @@ pub struct Bins {
     pub n: usize,
     width: f64,
     dirs: Arc<[DVec2]>,
-    mids: Arc<[DVec2]>,
+    /// The middle direction of bin 0.
+    mid0: DVec2,
 }
 
 impl Bins {
@@ -60,21 +61,21 @@ impl Bins {
                 .map(|k| DVec2::from_angle(k as f64 * width))
                 .collect::<Vec<_>>()
                 .into(),
-            mids: (0..n)
-                .map(|k| DVec2::from_angle((k as f64 + 0.5) * width))
-                .collect::<Vec<_>>()
-                .into(),
+            mid0: DVec2::from_angle(0.5 * width),
         }
     }
 
     /// Visit every bin met by the segment `pa → pb` (relative to the eye), with the
-    /// radial range of the part of the segment inside the bin's wedge (widened a
-    /// little: conservative for both uses) and whether the bin's middle ray crosses it.
+    /// nearest distance of the part of the segment inside the bin's wedge (lowered a
+    /// little: conservative) and, in bin 0, whether its middle ray crosses the segment
+    /// (the inside test of closed rings).
+    ///
+    /// Each end comes with its azimuth (`atan2`), computed once per vertex by the caller.
     fn edge(
         &self,
-        pa: DVec2,
-        pb: DVec2,
-        mut f: impl FnMut(usize, f64, f64, bool),
+        (pa, ta): (DVec2, f64),
+        (pb, tb): (DVec2, f64),
+        mut f: impl FnMut(usize, f64, bool),
     ) -> Result<(), ThroughEye> {
         let d = pb - pa;
         let len2 = d.length_squared();
@@ -88,7 +89,6 @@ impl Bins {
         if (pa + d * t).length() <= 1e-9 * scale {
             return Err(ThroughEye);
         }
-        let (ta, tb) = (pa.y.atan2(pa.x), pb.y.atan2(pb.x));
         let (lo, mut hi) = if pa.perp_dot(pb) >= 0.0 {
             (ta, tb)
         } else {
@@ -126,7 +126,6 @@ impl Bins {
                 continue;
             }
             let (q0, q1) = (pa + d * s0, pa + d * s1);
-            let hi_r = q0.length().max(q1.length()) + EPS_M;
             let e = q1 - q0;
             let el2 = e.length_squared();
             let u = if el2 > 0.0 {
@@ -135,16 +134,13 @@ impl Bins {
                 0.0
             };
             let lo_r = ((q0 + e * u).length() - EPS_M).max(0.0);
-            // Does the middle ray of the bin cross the edge (half-open rule)?
-            let m = self.mids[bin];
-            let (sa, sb) = (m.perp_dot(pa), m.perp_dot(pb));
-            let crosses = if (sa > 0.0) != (sb > 0.0) {
-                let u = sa / (sa - sb);
-                (pa + d * u).dot(m) > 0.0
-            } else {
-                false
+            // Does the middle ray of bin 0 cross the edge (half-open rule)?
+            let crosses = bin == 0 && {
+                let m = self.mid0;
+                let (sa, sb) = (m.perp_dot(pa), m.perp_dot(pb));
+                (sa > 0.0) != (sb > 0.0) && (pa + d * (sa / (sa - sb))).dot(m) > 0.0
             };
-            f(bin, lo_r, hi_r, crosses);
+            f(bin, lo_r, crosses);
         }
         Ok(())
     }
@@ -162,65 +158,144 @@ pub struct Target {
 impl Target {
     /// A target made of closed rings (polygon) or open polylines (`closed = false`),
     /// in coordinates relative to the eye.
-    pub fn new(bins: &Bins, parts: &[(Vec<DVec2>, bool)]) -> Self {
-        let mut hits: Vec<(usize, f64)> = Vec::new();
-        let mut at_eye = false;
-        let mut crossings = 0usize;
-        for (pts, closed) in parts {
-            let n = pts.len();
-            if n == 0 {
-                continue;
-            }
-            if n == 1 {
-                // A single point: a zero-length segment.
-                if bins
-                    .edge(pts[0], pts[0], |b, lo, _, _| hits.push((b, lo)))
-                    .is_err()
-                {
-                    at_eye = true;
+    pub fn new(bins: &Bins, parts: &[(&[DVec2], bool)]) -> Self {
+        NEAREST.with_borrow_mut(|near| {
+            near.start(bins.n);
+            let mut at_eye = false;
+            let mut crossings = 0usize;
+            for &(pts, closed) in parts {
+                let n = pts.len();
+                if n == 0 {
+                    continue;
                 }
-                continue;
-            }
-            let m = if *closed { n } else { n - 1 };
-            for i in 0..m {
-                let (a, b) = (pts[i], pts[(i + 1) % n]);
-                let r = bins.edge(a, b, |bin, lo, _, crosses| {
-                    hits.push((bin, lo));
-                    if *closed && bin == 0 && crosses {
-                        crossings += 1;
+                if n == 1 {
+                    // A single point: a zero-length segment.
+                    let p = pts[0];
+                    let a = p.y.atan2(p.x);
+                    if bins
+                        .edge((p, a), (p, a), |b, lo, _| near.hit(b, lo))
+                        .is_err()
+                    {
+                        at_eye = true;
                     }
-                });
-                if r.is_err() {
-                    at_eye = true;
+                    continue;
+                }
+                let angle = |p: DVec2| p.y.atan2(p.x);
+                let m = if closed { n } else { n - 1 };
+                let mut a = (pts[0], angle(pts[0]));
+                for i in 0..m {
+                    let q = pts[(i + 1) % n];
+                    let b = (q, angle(q));
+                    let r = bins.edge(a, b, |bin, lo, crosses| {
+                        near.hit(bin, lo);
+                        if closed && crosses {
+                            crossings += 1;
+                        }
+                    });
+                    if r.is_err() {
+                        at_eye = true;
+                    }
+                    a = b;
                 }
             }
-        }
-        // Eye inside a closed part: odd number of crossings of bin 0's middle ray
-        // (counted over all closed parts; parts are disjoint pieces of one object).
-        if crossings % 2 == 1 {
-            at_eye = true;
-        }
-        hits.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
-        hits.dedup_by(|later, first| later.0 == first.0);
-        Target { bins: hits, at_eye }
+            // Eye inside a closed part: odd number of crossings of bin 0's middle ray
+            // (counted over all closed parts; parts are disjoint pieces of one object).
+            if crossings % 2 == 1 {
+                at_eye = true;
+            }
+            Target {
+                bins: near.finish(),
+                at_eye,
+            }
+        })
     }
 }
 
-/// The polar occlusion map of one structuring element, seen from one cell centre.
+/// Per-thread scratch of [`Target::new`]: the nearest distance met in each bin so far
+/// (∞: none) and the bins met, so that a target's bins come out sorted and deduplicated
+/// without sorting its hits.
+#[derive(Default)]
+struct Nearest {
+    rho: Vec<f64>,
+    met: Vec<u32>,
+}
+
+thread_local! {
+    static NEAREST: std::cell::RefCell<Nearest> = std::cell::RefCell::new(Nearest::default());
+}
+
+impl Nearest {
+    fn start(&mut self, n: usize) {
+        if self.rho.len() < n {
+            self.rho.resize(n, f64::INFINITY);
+        }
+        self.met.clear();
+    }
+
+    #[inline]
+    fn hit(&mut self, bin: usize, rho: f64) {
+        let r = &mut self.rho[bin];
+        if *r == f64::INFINITY {
+            self.met.push(bin as u32);
+        }
+        *r = r.min(rho);
+    }
+
+    /// `(bin, nearest)` of every bin met, by bin; the scratch is left clean.
+    fn finish(&mut self) -> Vec<(usize, f64)> {
+        self.met.sort_unstable();
+        self.met
+            .iter()
+            .map(|&b| {
+                let rho = std::mem::replace(&mut self.rho[b as usize], f64::INFINITY);
+                (b as usize, rho)
+            })
+            .collect()
+    }
+}
+
+/// The polar occlusion map of one structuring element, seen from one cell centre,
+/// marched *lazily*: each bin is marched front to back only as far as the tests asked
+/// of it so far need, and a test stops as soon as it has its answer.
+///
+/// A bin's blockers are a deterministic sequence of sectors (see [`PolarMap::hidden`]);
+/// a test of a target at nearest distance `ρ` only uses the blockers nearer than `ρ`,
+/// so marching the bin up to `ρ` answers it exactly as a march of the whole bin would,
+/// and once a blocker hides the target the rest of the bin cannot change the answer
+/// (a target is hidden in a bin if *one* blocker hides it). A target is hidden only if
+/// it is hidden in every bin it touches: the first bin where it is visible ends its
+/// test, and the bins after it are not marched for it. This is §7 "Scaling"'s
+/// front-to-back rendering with the horizon closing, asked per sight-line bundle: most
+/// of a visible object's bins and most of the city behind a hidden one are never read.
 #[derive(Clone, Debug)]
 pub struct PolarMap {
     pub bins: Bins,
     /// Per bin: the farthest nearest-distance of a target tested there (−1: none);
-    /// occluders are only marched in those bins, and only that far.
+    /// the sector radii are laid out that far.
     reach: Vec<f64>,
-    /// Per bin: the highest target top, and the lowest and highest eye of the tests
-    /// there (a blocker no higher than every eye decides nothing; the early stop must
-    /// hold for the highest).
-    top: Vec<f64>,
+    /// Per bin: the lowest eye of the tests there (a blocker no higher decides
+    /// nothing).
     eye_lo: Vec<f64>,
-    eye_hi: Vec<f64>,
-    /// Per bin: blockers `(r_a, h)`, `r_a` increasing and `h` increasing.
-    stairs: Vec<Vec<(f64, f64)>>,
+    /// Near radii of the sectors, laid out at the first test (see [`Self::radii`]).
+    radii: Vec<f64>,
+    /// Per bin: its blockers and how far it is marched.
+    march: Vec<BinMarch>,
+    /// The map of the same occluders from the same eye with fewer bins, whose blockers
+    /// seed this one's ([`Self::seeded`]).
+    coarse: Option<Box<PolarMap>>,
+}
+
+/// The state of one bin's lazy march.
+#[derive(Clone, Debug, Default)]
+struct BinMarch {
+    /// Blockers `(r_a, h)`, `r_a` increasing and `h` increasing.
+    stairs: Vec<(f64, f64)>,
+    /// Sectors `0..next` are read (or skipped: they cannot give a blocker).
+    next: usize,
+    /// Length of the next attempt to skip a run of sectors.
+    run: usize,
+    /// Blockers of the coarse map's bin merged into `stairs` so far.
+    seeded: usize,
 }
 
 impl PolarMap {
@@ -229,62 +304,117 @@ impl PolarMap {
         PolarMap {
             bins,
             reach: vec![-1.0; n],
-            top: vec![f64::NEG_INFINITY; n],
             eye_lo: vec![f64::INFINITY; n],
-            eye_hi: vec![f64::NEG_INFINITY; n],
-            stairs: vec![Vec::new(); n],
+            radii: Vec::new(),
+            march: vec![BinMarch::default(); n],
+            coarse: None,
         }
     }
 
-    /// Record that `t` will be tested with eye height `eye` and top height `top`.
-    pub fn need(&mut self, t: &Target, eye: f64, top: f64) {
+    /// Record that `t` will be tested with eye height `eye` (the top height does not
+    /// bound anything a lazy march needs).
+    pub fn need(&mut self, t: &Target, eye: f64) {
         for &(b, rho) in &t.bins {
             self.reach[b] = self.reach[b].max(rho);
-            self.top[b] = self.top[b].max(top);
             self.eye_lo[b] = self.eye_lo[b].min(eye);
-            self.eye_hi[b] = self.eye_hi[b].max(eye);
         }
     }
 
-    /// A map whose bins start with the blockers of `coarse`, a map of the same
-    /// occluders from the same eye with `factor` times fewer bins: a coarse blocker's
-    /// sector spans its whole wedge, hence the wedge of each of the `factor` bins
-    /// nested in it, so it is a valid blocker there. The march of the finer map then
-    /// only looks for closer or higher blockers than those.
-    pub fn seeded(bins: Bins, coarse: &PolarMap) -> Self {
+    /// A map whose bins are seeded with the blockers of `coarse`, a map of the same
+    /// occluders from the same eye with a divisor of this map's bins: a coarse
+    /// blocker's sector spans its whole wedge, hence the wedge of each bin nested in
+    /// it, so it is a valid blocker there. The coarse bin is marched (lazily, as far as
+    /// the finer test needs) before the finer one, whose march then only looks for
+    /// closer or higher blockers.
+    ///
+    /// The blockers a bin ends with do not depend on when the seeds arrive: a sector
+    /// is kept iff it is higher than every blocker no farther, and the staircase keeps
+    /// the blockers no other is both nearer and higher than — the Pareto front of the
+    /// seeds and the kept sectors, whatever the order of insertion.
+    pub fn seeded(bins: Bins, coarse: PolarMap) -> Self {
         let mut m = PolarMap::new(bins);
         if coarse.bins.n > 0 && m.bins.n.is_multiple_of(coarse.bins.n) {
-            let factor = m.bins.n / coarse.bins.n;
-            for (b, st) in m.stairs.iter_mut().enumerate() {
-                st.clone_from(&coarse.stairs[b / factor]);
-            }
+            m.coarse = Some(Box::new(coarse));
         }
         m
     }
 
-    /// Fill the needed bins from an eroded occluder raster (decimetres) seen from
-    /// `eye` (horizontal position): each bin's wedge is cut radially into annular
-    /// sectors about a pixel long; a sector becomes a blocker at its near radius with
-    /// a lower bound of the height of every pixel it meets — the *inner* rule: the
-    /// whole sector stands at least that high, so any sight line of the bin that enters
-    /// it lower is blocked. A bin stops at its farthest target, or once a blocker hides
-    /// the highest target from the highest eye tested there at any distance beyond (an
-    /// early stop only costs tightness: fewer blockers never hide more).
+    /// Whether the target (top face at height `t`, eye height `e`) is hidden in every
+    /// bin it touches, from the eroded occluders `grid` seen from `eye` (horizontal
+    /// position). The bins are tested from the `first`-th of the target's (modulo
+    /// their number) on: the caller's guess of where it is visible.
     ///
-    /// A sector gives a blocker only if it stands higher than every eye tested in the
-    /// bin and than the blockers already found no farther. So a run of consecutive
-    /// sectors is skipped at once when an *upper* bound of the raster over the run's
-    /// bounding box ([`Occluders::max_at_most`]) is no higher: no sector of the run could
-    /// have given a blocker. Runs double while they succeed, halve at each failure and
-    /// restart at one sector after a new blocker; the sectors are those of the one-by-one march, and the early
-    /// stop is checked at the end of a skipped run (its condition only grows with the
-    /// radius and no blocker was added inside), so the blockers are exactly those of the
-    /// one-by-one march (`march_one_by_one`, kept for the tests).
-    pub fn march<R: Occluders>(&mut self, grid: &R, eye: DVec2) {
-        let radii = self.radii(grid.pixel_m());
+    /// Each bin's wedge is cut radially into annular sectors about a pixel long; a
+    /// sector becomes a blocker at its near radius with a lower bound of the height of
+    /// every pixel it meets — the *inner* rule: the whole sector stands at least that
+    /// high, so any sight line of the bin that enters it lower is blocked.
+    pub fn hidden<R: Occluders>(
+        &mut self,
+        grid: &R,
+        eye: DVec2,
+        target: &Target,
+        e: f64,
+        t: f64,
+        first: usize,
+    ) -> bool {
+        if target.at_eye || target.bins.is_empty() {
+            return false;
+        }
+        let n = target.bins.len();
+        (0..n).all(|k| {
+            let (bin, rho) = target.bins[(first + k) % n];
+            self.bin_hidden_at(grid, eye, bin, rho, Some((e, t)))
+        })
+    }
+
+    /// The index of the first bin of `target` in which a test with `e`, `t` would not
+    /// be hidden by the blockers found so far (a guess for [`Self::hidden`]'s `first`).
+    pub fn open_bin(&self, target: &Target, e: f64, t: f64) -> Option<usize> {
+        target
+            .bins
+            .iter()
+            .position(|&(b, rho)| !bin_hidden(&self.march[b].stairs, rho, e, t))
+    }
+
+    /// March `bin` until a blocker nearer than `rho` hides the target `(e, t)` (true)
+    /// or every sector nearer than `rho` is read (false); with no target, only the
+    /// latter.
+    fn bin_hidden_at<R: Occluders>(
+        &mut self,
+        grid: &R,
+        eye: DVec2,
+        bin: usize,
+        rho: f64,
+        target: Option<(f64, f64)>,
+    ) -> bool {
+        if self.radii.is_empty() {
+            self.radii = self.radii(grid.pixel_m());
+        }
+        if let Some(coarse) = self.coarse.as_deref_mut() {
+            let cb = bin / (self.bins.n / coarse.bins.n);
+            coarse.bin_hidden_at(grid, eye, cb, rho, None);
+            let st = &mut self.march[bin];
+            for &(ra, h) in &coarse.march[cb].stairs[st.seeded..] {
+                insert_blocker(&mut st.stairs, ra, h);
+            }
+            st.seeded = coarse.march[cb].stairs.len();
+        }
+        let decides = |(ra, h): (f64, f64)| target.is_some_and(|(e, t)| hides(ra, h, rho, e, t));
+        let st = &mut self.march[bin];
+        if target.is_some_and(|(e, t)| bin_hidden(&st.stairs, rho, e, t)) {
+            return true;
+        }
+        let radii = &self.radii;
+        // Sectors 0..n_sec are those with a near radius below `rho`.
+        let n_sec = radii.partition_point(|&r| r < rho).min(radii.len() - 1);
+        if st.next >= n_sec {
+            return false;
+        }
+        let e_lo = self.eye_lo[bin];
         let w = self.bins.width;
         let bulge_k = 1.0 - w.cos();
-        let sector_box = |da: DVec2, db: DVec2, r: f64, r1: f64| {
+        let (da, db) = (self.bins.dirs[bin], self.bins.dirs[bin + 1]);
+        let sector_box = |r: f64, r1: f64| {
             let bulge = r1 * bulge_k + 1e-9;
             let pts = [da * r, db * r, da * r1, db * r1];
             let mut bb = Aabb2::from_points(&pts).expand(bulge);
@@ -292,62 +422,44 @@ impl PolarMap {
             bb.max += eye;
             bb
         };
-        for bin in 0..self.bins.n {
-            let reach = self.reach[bin];
-            if reach < 0.0 {
-                continue;
+        let (mut k, mut run) = (st.next, st.run.max(1));
+        let mut found = false;
+        while k < n_sec {
+            let r = radii[k];
+            // The blocker a new one must beat: the highest no farther than it.
+            let best = best_at(&st.stairs, r + EPS_M);
+            let floor_h = best.map_or(e_lo, |(_, hb)| hb.max(e_lo));
+            if run >= 2 {
+                let end = (k + run).min(n_sec);
+                if end - k >= 2 {
+                    let skip = dm_at_most(floor_h)
+                        .is_some_and(|lim| grid.max_at_most(sector_box(r, radii[end]), lim));
+                    if skip {
+                        k = end;
+                        run = (run * 2).min(1 << 12);
+                        continue;
+                    }
+                    // Shorter runs from here on (halved at each failure).
+                    run /= 2;
+                }
             }
-            // Sectors 0..n_sec are those with a near radius below the reach.
-            let n_sec = radii.partition_point(|&r| r < reach);
-            let (top, e_lo, e) = (self.top[bin], self.eye_lo[bin], self.eye_hi[bin]);
-            let (da, db) = (self.bins.dirs[bin], self.bins.dirs[bin + 1]);
-            let stairs = &mut self.stairs[bin];
-            let mut run = 1usize;
-            let mut k = 0usize;
-            while k < n_sec {
-                let r = radii[k];
-                // The blocker a new one must beat: the highest no farther than it.
-                let best = best_at(stairs, r + EPS_M);
-                let floor_h = best.map_or(e_lo, |(_, hb)| hb.max(e_lo));
-                let stop =
-                    |r1: f64| best.is_some_and(|(ra, h)| h > e && (top - e) * ra < (h - e) * r1);
-                if run >= 2 {
-                    let end = (k + run).min(n_sec);
-                    if end - k >= 2 {
-                        let r_end = radii[end];
-                        let skip = dm_at_most(floor_h)
-                            .is_some_and(|lim| grid.max_at_most(sector_box(da, db, r, r_end), lim));
-                        if skip {
-                            if stop(r_end) {
-                                break;
-                            }
-                            k = end;
-                            run = (run * 2).min(1 << 12);
-                            continue;
-                        }
-                        // Shorter runs from here on (halved at each failure).
-                        run /= 2;
-                    }
+            // One sector.
+            let h = grid.min_over(sector_box(r, radii[k + 1])) as f64 * DM;
+            k += 1;
+            if h > e_lo && best.is_none_or(|(_, hb)| h > hb) {
+                insert_blocker(&mut st.stairs, r + EPS_M, h);
+                run = 1;
+                if decides((r + EPS_M, h)) {
+                    found = true;
+                    break;
                 }
-                // One sector, as the one-by-one march.
-                let r1 = radii[k + 1];
-                let h = grid.min_over(sector_box(da, db, r, r1)) as f64 * DM;
-                let mut best = best;
-                if h > e_lo && best.is_none_or(|(_, hb)| h > hb) {
-                    insert_blocker(stairs, r + EPS_M, h);
-                    best = Some((r + EPS_M, h));
-                    run = 1;
-                } else {
-                    run = run.max(2);
-                }
-                if let Some((ra, h)) = best {
-                    if h > e && (top - e) * ra < (h - e) * r1 {
-                        break;
-                    }
-                }
-                k += 1;
+            } else {
+                run = run.max(2);
             }
         }
+        st.next = k;
+        st.run = run;
+        found
     }
 
     /// The near radii of the march's sectors (sector `k` is `[radii[k], radii[k+1]]`),
@@ -366,7 +478,17 @@ impl PolarMap {
         radii
     }
 
-    /// The march one sector at a time (the reference of `march`).
+    /// March every needed bin as far as its farthest target (the whole map).
+    #[cfg(test)]
+    fn march_all<R: Occluders>(&mut self, grid: &R, eye: DVec2) {
+        for bin in 0..self.bins.n {
+            if self.reach[bin] >= 0.0 {
+                self.bin_hidden_at(grid, eye, bin, self.reach[bin], None);
+            }
+        }
+    }
+
+    /// The march one sector at a time (the reference of the skipping march).
     #[cfg(test)]
     fn march_one_by_one(&mut self, grid: &MinPyramid, eye: DVec2) {
         let d = grid.levels[0].pixel_m;
@@ -377,9 +499,9 @@ impl PolarMap {
             if reach < 0.0 {
                 continue;
             }
-            let (top, e_lo, e) = (self.top[bin], self.eye_lo[bin], self.eye_hi[bin]);
+            let e_lo = self.eye_lo[bin];
             let (da, db) = (self.bins.dirs[bin], self.bins.dirs[bin + 1]);
-            let stairs = &mut self.stairs[bin];
+            let stairs = &mut self.march[bin].stairs;
             let mut r = 0.0f64;
             while r < reach {
                 let r1 = r + (0.5 * d).max(r * w);
@@ -393,26 +515,9 @@ impl PolarMap {
                 if h > e_lo && best.is_none_or(|(_, hb)| h > hb) {
                     insert_blocker(stairs, r + EPS_M, h);
                 }
-                if let Some((ra, h)) = best_at(stairs, r + EPS_M) {
-                    if h > e && (top - e) * ra < (h - e) * r1 {
-                        break;
-                    }
-                }
                 r = r1;
             }
         }
-    }
-
-    /// Whether the target (top face at height `t`, eye height `e`) is hidden in every
-    /// bin it touches.
-    pub fn hidden(&self, target: &Target, e: f64, t: f64) -> bool {
-        if target.at_eye || target.bins.is_empty() {
-            return false;
-        }
-        target
-            .bins
-            .iter()
-            .all(|&(bin, rho)| bin_hidden(&self.stairs[bin], rho, e, t))
     }
 }
 
@@ -432,19 +537,21 @@ fn dm_at_most(h: f64) -> Option<u16> {
     (f64::from(v) * DM <= h).then_some(v)
 }
 
+/// Whether a blocker of the staircase hides a target at nearest distance `rho`, top
+/// height `t`, from the eye height `e`.
 fn bin_hidden(stairs: &[(f64, f64)], rho: f64, e: f64, t: f64) -> bool {
-    for &(ra, h) in stairs {
-        if ra >= rho - EPS_M {
-            break;
-        }
-        if h <= e + EPS_M {
-            continue;
-        }
-        if t <= e || (t - e + EPS_M) * ra < (h - e - EPS_M) * rho {
-            return true;
-        }
-    }
-    false
+    stairs
+        .iter()
+        .take_while(|&&(ra, _)| ra < rho - EPS_M)
+        .any(|&(ra, h)| hides(ra, h, rho, e, t))
+}
+
+/// Whether the blocker `(ra, h)` hides a target at nearest distance `rho` (beyond
+/// `ra`), top height `t`, from the eye height `e`: the sight line rises less than the
+/// blocker's top by `ra` (a descending one always does), with slack towards visible.
+#[inline]
+fn hides(ra: f64, h: f64, rho: f64, e: f64, t: f64) -> bool {
+    ra < rho - EPS_M && h > e + EPS_M && (t <= e || (t - e + EPS_M) * ra < (h - e - EPS_M) * rho)
 }
 
 /// The highest blocker at a radius no greater than `r` (the staircase's `h` grows with
@@ -493,28 +600,33 @@ mod tests {
         g
     }
 
-    fn map_with(walls: &[(f64, f64, f64, f64, f64)], t: &Target, bins: Bins) -> PolarMap {
+    /// A map of `walls` seen from the origin, to test `t` with an eye at 2 m.
+    fn map_with(
+        walls: &[(f64, f64, f64, f64, f64)],
+        t: &Target,
+        bins: Bins,
+    ) -> (PolarMap, MinPyramid) {
         let mut m = PolarMap::new(bins);
-        m.need(t, 2.0, 50.0);
-        m.march(&MinPyramid::new(grid(walls)), DVec2::ZERO);
-        m
+        m.need(t, 2.0);
+        (m, MinPyramid::new(grid(walls)))
     }
 
     fn target(bins: &Bins, r: Vec<DVec2>) -> Target {
-        Target::new(bins, &[(r, true)])
+        Target::new(bins, &[(&r, true)])
     }
 
     #[test]
     fn wall_hides_low_block_not_tower() {
         let bins = Bins::new(512);
         let behind = target(&bins, rect(20.0, -5.0, 30.0, 5.0));
-        let m = map_with(&[(10.0, -30.0, 11.0, 30.0, 10.0)], &behind, bins);
+        let (mut m, p) = map_with(&[(10.0, -30.0, 11.0, 30.0, 10.0)], &behind, bins);
+        let o = DVec2::ZERO;
         // Eye at 2 m: a 9 m block 20 m away behind a 10 m wall 10 m away is hidden...
-        assert!(m.hidden(&behind, 2.0, 9.0));
+        assert!(m.hidden(&p, o, &behind, 2.0, 9.0, 0));
         // ... a 40 m tower is not ((40-2)/20 > (10-2)/10).
-        assert!(!m.hidden(&behind, 2.0, 40.0));
+        assert!(!m.hidden(&p, o, &behind, 2.0, 40.0, 0));
         // A street (t = 0) behind is hidden.
-        assert!(m.hidden(&behind, 2.0, 0.0));
+        assert!(m.hidden(&p, o, &behind, 2.0, 0.0, 0));
     }
 
     #[test]
@@ -525,16 +637,16 @@ mod tests {
             (10.0, -30.0, 11.0, -0.5, 10.0),
             (10.0, 0.5, 11.0, 30.0, 10.0),
         ];
-        let m = map_with(&walls, &behind, bins);
-        assert!(!m.hidden(&behind, 2.0, 0.0));
+        let (mut m, p) = map_with(&walls, &behind, bins);
+        assert!(!m.hidden(&p, DVec2::ZERO, &behind, 2.0, 0.0, 0));
     }
 
     #[test]
     fn eye_inside_occluder_blocks_everything() {
         let bins = Bins::new(64);
         let far = target(&bins, rect(20.0, -5.0, 30.0, 5.0));
-        let m = map_with(&[(-5.0, -5.0, 5.0, 5.0, 10.0)], &far, bins);
-        assert!(m.hidden(&far, 2.0, 9.0));
+        let (mut m, p) = map_with(&[(-5.0, -5.0, 5.0, 5.0, 10.0)], &far, bins);
+        assert!(m.hidden(&p, DVec2::ZERO, &far, 2.0, 9.0, 0));
     }
 
     #[test]
@@ -542,8 +654,8 @@ mod tests {
         let bins = Bins::new(64);
         let t = target(&bins, rect(-5.0, -5.0, 5.0, 5.0));
         assert!(t.at_eye);
-        let m = map_with(&[(-1.0, -1.0, 1.0, 1.0, 10.0)], &t, bins);
-        assert!(!m.hidden(&t, 2.0, 0.0));
+        let (mut m, p) = map_with(&[(-1.0, -1.0, 1.0, 1.0, 10.0)], &t, bins);
+        assert!(!m.hidden(&p, DVec2::ZERO, &t, 2.0, 0.0, 0));
     }
 
     /// A random city-like raster around the eye: blocks of random heights, some
@@ -574,16 +686,30 @@ mod tests {
         g
     }
 
-    /// A map needing every bin up to 60 m, with eyes 1.5..2.5 m and targets up to 30 m.
-    fn needy(bins: Bins) -> PolarMap {
-        let mut m = PolarMap::new(bins);
+    /// A map needing every bin up to 60 m, with eyes from 1.5 m.
+    fn needy(m: PolarMap) -> PolarMap {
+        let mut m = m;
         for b in 0..m.bins.n {
             m.reach[b] = 60.0;
-            m.top[b] = 30.0;
             m.eye_lo[b] = 1.5;
-            m.eye_hi[b] = 2.5;
         }
         m
+    }
+
+    /// Whether the blockers found so far hide the target in every bin (no marching).
+    fn hidden_by_stairs(m: &PolarMap, target: &Target, e: f64, t: f64) -> bool {
+        !target.at_eye && !target.bins.is_empty() && m.open_bin(target, e, t).is_none()
+    }
+
+    /// Small targets all around the eye, 8 to 58 m away.
+    fn ring_of_targets(bins: &Bins) -> Vec<Target> {
+        (0..400)
+            .map(|k| {
+                let a = k as f64 * 0.0157;
+                let c = DVec2::from_angle(a) * (8.0 + (k % 50) as f64);
+                target(bins, rect(c.x, c.y, c.x + 0.8, c.y + 0.6))
+            })
+            .collect()
     }
 
     #[test]
@@ -622,13 +748,39 @@ mod tests {
             for (n, px) in [(64, 0.5), (512, 0.5), (2048, 0.25)] {
                 let p = MinPyramid::new(random_grid(seed, px));
                 let eye = DVec2::new(0.1 * seed as f64, -0.07 * seed as f64);
-                let mut fast = needy(Bins::new(n));
+                let mut fast = needy(PolarMap::new(Bins::new(n)));
                 let mut slow = fast.clone();
-                fast.march(&p, eye);
+                fast.march_all(&p, eye);
                 slow.march_one_by_one(&p, eye);
-                assert_eq!(fast.stairs, slow.stairs, "seed {seed}, {n} bins");
-                assert!(fast.stairs.iter().any(|s| !s.is_empty()));
+                let stairs = |m: &PolarMap| -> Vec<Vec<(f64, f64)>> {
+                    m.march.iter().map(|b| b.stairs.clone()).collect()
+                };
+                assert_eq!(stairs(&fast), stairs(&slow), "seed {seed}, {n} bins");
+                assert!(fast.march.iter().any(|b| !b.stairs.is_empty()));
             }
+        }
+    }
+
+    /// The lazy test of each target, in any order and from any first bin, answers as
+    /// the whole map marched first: laziness changes no answer.
+    #[test]
+    fn lazy_answers_equal_the_whole_march() {
+        for seed in 1..7u64 {
+            let p = MinPyramid::new(random_grid(seed, 0.5));
+            let bins = Bins::new(1024);
+            let mut whole = needy(PolarMap::new(bins.clone()));
+            whole.march_all(&p, DVec2::ZERO);
+            let mut lazy = needy(PolarMap::new(bins.clone()));
+            let mut hidden = 0;
+            for (k, t) in ring_of_targets(&bins).iter().enumerate().rev() {
+                for z in [0.0, 6.0, 15.0, 28.0] {
+                    let by_whole = hidden_by_stairs(&whole, t, 2.0, z);
+                    let by_lazy = lazy.hidden(&p, DVec2::ZERO, t, 2.0, z, k % 5);
+                    assert_eq!(by_whole, by_lazy, "seed {seed} target {k} z {z}");
+                    hidden += usize::from(by_lazy);
+                }
+            }
+            assert!(hidden > 0);
         }
     }
 
@@ -638,31 +790,17 @@ mod tests {
     fn seeded_map_hides_at_least_the_unseeded() {
         for seed in 1..7u64 {
             let p = MinPyramid::new(random_grid(seed, 0.5));
-            let mut coarse = needy(Bins::new(256));
-            coarse.march(&p, DVec2::ZERO);
-            let mut plain = needy(Bins::new(2048));
-            let mut seeded = PolarMap::seeded(Bins::new(2048), &coarse);
-            for b in 0..2048 {
-                seeded.reach[b] = 60.0;
-                seeded.top[b] = 30.0;
-                seeded.eye_lo[b] = 1.5;
-                seeded.eye_hi[b] = 2.5;
-            }
-            plain.march(&p, DVec2::ZERO);
-            seeded.march(&p, DVec2::ZERO);
+            let coarse = needy(PolarMap::new(Bins::new(256)));
+            let mut plain = needy(PolarMap::new(Bins::new(2048)));
+            let mut seeded = needy(PolarMap::seeded(Bins::new(2048), coarse));
             let bins = Bins::new(2048);
             let mut hidden = 0;
-            for k in 0..400 {
-                let a = k as f64 * 0.0157;
-                let c = DVec2::from_angle(a) * (8.0 + (k % 50) as f64);
-                let t = target(&bins, rect(c.x, c.y, c.x + 0.8, c.y + 0.6));
+            for (k, t) in ring_of_targets(&bins).iter().enumerate() {
                 for z in [0.0, 6.0, 15.0, 28.0] {
-                    let by_plain = plain.hidden(&t, 2.0, z);
-                    let by_seeded = seeded.hidden(&t, 2.0, z);
+                    let by_plain = plain.hidden(&p, DVec2::ZERO, t, 2.0, z, 0);
+                    let by_seeded = seeded.hidden(&p, DVec2::ZERO, t, 2.0, z, 0);
                     assert!(!by_plain || by_seeded, "seed {seed} target {k} z {z}");
-                    if by_seeded {
-                        hidden += 1;
-                    }
+                    hidden += usize::from(by_seeded);
                 }
             }
             assert!(hidden > 0);
