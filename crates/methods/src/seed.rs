@@ -29,6 +29,10 @@
 //! ray grazes an occluder: that object is kept, never dropped, so conservativeness does
 //! not depend on this module at all. Tests compare the PVS with and without the seed.
 //!
+//! `dual-ray` also *aims* single rays of the same march at one box whose test the near
+//! occluders did not settle ([`SeedGrid::aim`]): the march stops past the box or once
+//! the horizon hides its top, and what it meets first is accepted the same way.
+//!
 //! Per azimuth the march stops once the running horizon is above what the tallest prism
 //! of the scene could reach further on, so azimuths into a facade cost a few buckets and
 //! only the ones along open streets run far.
@@ -62,7 +66,7 @@ pub(crate) struct SeedScratch {
     gen: u32,
     /// `(distance, last crossing, prism, as an occluder)`.
     events: Vec<(f64, f64, u32, bool)>,
-    /// The objects marked by the last [`SeedGrid::aim`].
+    /// The objects marked since the last [`SeedGrid::mark`] or [`SeedGrid::aim`] began.
     pub(crate) marked: Vec<u32>,
 }
 

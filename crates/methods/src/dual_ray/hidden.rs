@@ -26,8 +26,9 @@
 //! in its other buckets; only pieces are dropped, so skipping never hides anything more.
 //!
 //! The set depends on the cell and on the order of the tests, which is fixed; the exact
-//! planar method proves hidden every box the discretized one does, so with the same order
-//! its set covers the discretized one's and `dual-ray` keeps containing `dual-ray-exact`.
+//! planar method proves hidden every box the discretized one does (or an ancestor of it),
+//! so the region its set covers contains the discretized one's at every step, and
+//! `dual-ray` keeps containing `dual-ray-exact` (property-tested).
 
 use super::occluders::{Axis, Decomposition};
 use super::plane::{local_rect, Rect};

@@ -45,8 +45,8 @@
 //! Order of one box-to-box test along an axis: the occluders next to the narrower box
 //! are gathered first, with the hidden boxes over the whole shaft; their coverage may
 //! already settle "hidden"; else a witness ray from their gaps, checked along its own
-//! line through the rest of the shaft, settles "visible" for this axis; for an object,
-//! rays aimed at it may settle "visible"; only then is the whole shaft gathered and
+//! line through the rest of the shaft, settles "visible" for this axis; rays aimed at
+//! the node or object may settle "visible"; only then is the whole shaft gathered and
 //! tested.
 //!
 //! Degenerate configurations: boxes overlapping in both x and y (the cell inside a
