@@ -39,6 +39,31 @@ pub(crate) struct Occluder {
     pub object: u32,
 }
 
+/// Marks of the ids met by the current walk of a [`BucketGrid`] (an id listed in several
+/// buckets is handled once): [`Stamps::next`] starts a walk by taking a new generation,
+/// so the marks are cleared only when the ids outgrow them or the generation wraps.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Stamps {
+    pub marks: Vec<u32>,
+    gen: u32,
+}
+
+impl Stamps {
+    /// A new walk over ids `0..len`: its generation.
+    pub(crate) fn next(&mut self, len: usize) -> u32 {
+        if self.marks.len() < len {
+            self.marks = vec![0; len];
+            self.gen = 0;
+        }
+        self.gen = self.gen.wrapping_add(1);
+        if self.gen == 0 {
+            self.marks.fill(0);
+            self.gen = 1;
+        }
+        self.gen
+    }
+}
+
 /// A uniform grid of the ids of boxes (slabs, prisms) over the scene, in local
 /// coordinates: each id is in every bucket its box meets.
 #[derive(Clone, Debug)]

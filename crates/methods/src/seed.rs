@@ -39,7 +39,7 @@
 //! Along those, most prisms of a bucket stand beside the ray: a ray missing a prism's
 //! (slightly widened) bounding box is passed without testing its edges.
 
-use crate::occluders::{local_rings, BucketGrid, Occluder, GROUND_M};
+use crate::occluders::{local_rings, BucketGrid, Occluder, Stamps, GROUND_M};
 use sightline_geom::{Aabb3, DVec2};
 use sightline_scene::Scene;
 
@@ -62,8 +62,8 @@ const CLEAR_MARGIN: f64 = 1e-9;
 /// Per-thread buffers of [`SeedGrid::mark`].
 #[derive(Default)]
 pub(crate) struct SeedScratch {
-    stamp: Vec<u32>,
-    gen: u32,
+    /// Per prism, the last ray that met it.
+    stamps: Stamps,
     /// `(distance, last crossing, prism, as an occluder)`.
     events: Vec<(f64, f64, u32, bool)>,
     /// The objects marked since the last [`SeedGrid::mark`] or [`SeedGrid::aim`] began.
@@ -265,10 +265,6 @@ impl SeedGrid {
     /// Mark in `seen` every object reached first by a ray from one of the eyes on the
     /// top face of `cell` (local frame). Returns the number of objects marked.
     pub(crate) fn mark(&self, cell: &Aabb3, seen: &mut [bool], s: &mut SeedScratch) -> usize {
-        if s.stamp.len() != self.prisms.len() {
-            s.stamp = vec![0; self.prisms.len()];
-            s.gen = 0;
-        }
         s.marked.clear();
         let z = cell.max.z;
         let mut count = 0;
@@ -326,10 +322,6 @@ impl SeedGrid {
         s: &mut SeedScratch,
     ) -> usize {
         s.marked.clear();
-        if s.stamp.len() != self.prisms.len() {
-            s.stamp = vec![0; self.prisms.len()];
-            s.gen = 0;
-        }
         let (lo, hi) = (target.min.truncate(), target.max.truncate());
         let to = at - eye;
         let len = to.length();
@@ -398,12 +390,7 @@ impl SeedGrid {
         s: &mut SeedScratch,
     ) -> (usize, u64) {
         let mut sig: u64 = 0xcbf2_9ce4_8422_2325;
-        s.gen = s.gen.wrapping_add(1);
-        if s.gen == 0 {
-            s.stamp.fill(0);
-            s.gen = 1;
-        }
-        let gen = s.gen;
+        let gen = s.stamps.next(self.prisms.len());
         let mut marked = 0;
         let mut horizon = f64::NEG_INFINITY;
         // Start where the ray enters the grid (an eye may stand outside it).
@@ -475,7 +462,7 @@ impl SeedGrid {
                 self.grid.bucket(c as usize, r as usize)
             };
             for &i in bucket {
-                if s.stamp[i as usize] == gen {
+                if s.stamps.marks[i as usize] == gen {
                     continue;
                 }
                 let p = &self.prisms[i as usize];
@@ -492,13 +479,13 @@ impl SeedGrid {
                     crossings(self.prism_edges(p), eye, d)
                 };
                 let Some((t, t_last)) = crossed else {
-                    s.stamp[i as usize] = gen; // the ray never enters it
+                    s.stamps.marks[i as usize] = gen; // the ray never enters it
                     continue;
                 };
                 // A prism is handled in the first bucket reached at or after the ray's
                 // entry into it (an entry rounded into the previous bucket comes late).
                 if t < t1 {
-                    s.stamp[i as usize] = gen;
+                    s.stamps.marks[i as usize] = gen;
                     if occludee {
                         events.push((t, t_last, i, false));
                     }

@@ -33,6 +33,7 @@
 
 use super::hidden::{Cover, HiddenSet};
 use super::occluders::{Axis, Decomposition, Slab, Trap};
+use crate::occluders::Stamps;
 use sightline_geom::{orient2d, Aabb3, DVec2, Orientation};
 
 /// Kept pieces of the ceiling cut are shrunk by this much along `x` (metres): rounding
@@ -254,8 +255,8 @@ pub(crate) struct Band {
 #[derive(Default)]
 pub(crate) struct Scratch {
     pub planar: Planar,
-    pub stamp: Vec<u32>,
-    pub stamp_gen: u32,
+    /// Per slab, the last walk that cut it (shared by both axes' decompositions).
+    pub slab_stamps: Stamps,
     pub cuts: Vec<f64>,
     pub kept: Vec<(f64, f64)>,
     pub intervals: Vec<(f64, f64)>,
@@ -267,9 +268,8 @@ pub(crate) struct Scratch {
     pub far: Vec<Piece>,
     /// Candidate rays `(gap width, u, w)`.
     pub candidates: Vec<(f64, f64, f64)>,
-    /// Per hidden box, the generation of the last test that took it as a piece.
-    pub hidden_stamp: Vec<u32>,
-    pub hidden_gen: u32,
+    /// Per hidden box, the last test that took it as a piece.
+    pub hidden_stamps: Stamps,
     /// The pieces of the hidden boxes of the last shaft built.
     pub hidden_pieces: Vec<Piece>,
 }
@@ -392,7 +392,7 @@ impl Planar {
             y0: r.y0 - yc,
             y1: r.y1 - yc,
         };
-        let gen = next_stamp(scratch, decomp);
+        let gen = scratch.slab_stamps.next(decomp.slabs.len());
         let p = &mut scratch.planar;
         p.len = xb - xa;
         p.lo = to_local(&lo);
@@ -420,7 +420,7 @@ impl Planar {
         let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
         walk_slabs(
             decomp,
-            (&mut scratch.stamp, gen),
+            (&mut scratch.slab_stamps.marks, gen),
             (ga, gb),
             &ceiling,
             hidden.cover(),
@@ -451,16 +451,8 @@ impl Planar {
             let cache = &mut scratch.hidden_pieces;
             if !hidden.reuse {
                 cache.clear();
-                let stamps = &mut scratch.hidden_stamp;
-                if stamps.len() < set.boxes.len() {
-                    stamps.resize(set.boxes.len(), 0);
-                }
-                scratch.hidden_gen = scratch.hidden_gen.wrapping_add(1);
-                if scratch.hidden_gen == 0 {
-                    stamps.iter_mut().for_each(|s| *s = 0);
-                    scratch.hidden_gen = 1;
-                }
-                let hgen = scratch.hidden_gen;
+                let hgen = scratch.hidden_stamps.next(set.boxes.len());
+                let stamps = &mut scratch.hidden_stamps.marks;
                 set.cover(hidden.axis).visit(
                     (xa, xb),
                     |cx0, cx1| (lower(cx0).min(lower(cx1)), upper(cx0).max(upper(cx1))),
@@ -526,7 +518,7 @@ impl Planar {
         u: f64,
         w: f64,
     ) -> bool {
-        let gen = next_stamp(scratch, decomp);
+        let gen = scratch.slab_stamps.next(decomp.slabs.len());
         let p = &scratch.planar;
         let (xa, xb, yc, len) = (p.xa, p.xb, p.yc, p.len);
         let (u_lo, u_hi, w_lo, w_hi) = (p.u_lo, p.u_hi, p.w_lo, p.w_hi);
@@ -542,7 +534,7 @@ impl Planar {
             }
             let clear = walk_slabs(
                 decomp,
-                (&mut scratch.stamp, gen),
+                (&mut scratch.slab_stamps.marks, gen),
                 (f0, f1),
                 &p.ceiling,
                 hidden.cover(),
@@ -623,21 +615,6 @@ impl Planar {
             }
         }
     }
-}
-
-/// A fresh generation of the per-slab stamps (each slab is cut once per walk). The
-/// stamps are shared by both axes' decompositions: only growing them clears them.
-fn next_stamp(scratch: &mut Scratch, decomp: &Decomposition) -> u32 {
-    if scratch.stamp.len() < decomp.slabs.len() {
-        scratch.stamp = vec![0; decomp.slabs.len()];
-        scratch.stamp_gen = 0;
-    }
-    scratch.stamp_gen = scratch.stamp_gen.wrapping_add(1);
-    if scratch.stamp_gen == 0 {
-        scratch.stamp.iter_mut().for_each(|s| *s = 0);
-        scratch.stamp_gen = 1;
-    }
-    scratch.stamp_gen
 }
 
 /// Whether the line `a b` leaves every vertex of the convex piece `q` strictly on one
