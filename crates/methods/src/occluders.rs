@@ -39,6 +39,13 @@ pub(crate) struct Occluder {
     pub object: u32,
 }
 
+/// The bucket of `v` on an axis of `n` buckets of `cell_m` from `origin`, clamped to the
+/// grid. `as` saturates: below the origin (and NaN) is bucket 0, as floor-then-clamp.
+#[inline]
+pub(crate) fn bucket_of(v: f64, origin: f64, cell_m: f64, n: usize) -> usize {
+    (((v - origin) / cell_m) as usize).min(n - 1)
+}
+
 /// Marks of the ids met by the current walk of a [`BucketGrid`] (an id listed in several
 /// buckets is handled once): [`Stamps::next`] starts a walk by taking a new generation,
 /// so the marks are cleared only when the ids outgrow them or the generation wraps.
@@ -150,12 +157,11 @@ impl BucketGrid {
 
     #[inline]
     pub(crate) fn col(&self, x: f64) -> usize {
-        // `as` saturates: below the origin (and NaN) is column 0, as floor-then-clamp.
-        (((x - self.origin.x) / self.cell_m) as usize).min(self.nx - 1)
+        bucket_of(x, self.origin.x, self.cell_m, self.nx)
     }
     #[inline]
     pub(crate) fn row(&self, y: f64) -> usize {
-        (((y - self.origin.y) / self.cell_m) as usize).min(self.ny - 1)
+        bucket_of(y, self.origin.y, self.cell_m, self.ny)
     }
     #[inline]
     pub(crate) fn bucket(&self, c: usize, r: usize) -> &[u32] {

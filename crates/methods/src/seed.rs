@@ -265,10 +265,20 @@ impl SeedGrid {
     /// Mark in `seen` every object reached first by a ray from one of the eyes on the
     /// top face of `cell` (local frame). Returns the number of objects marked.
     pub(crate) fn mark(&self, cell: &Aabb3, seen: &mut [bool], s: &mut SeedScratch) -> usize {
+        self.mark_from(&self.eyes(cell), cell.max.z, seen, s)
+    }
+
+    /// [`SeedGrid::mark`] from the given eyes at height `z` (the cell's [`SeedGrid::eyes`]).
+    pub(crate) fn mark_from(
+        &self,
+        eyes: &[DVec2],
+        z: f64,
+        seen: &mut [bool],
+        s: &mut SeedScratch,
+    ) -> usize {
         s.marked.clear();
-        let z = cell.max.z;
         let mut count = 0;
-        for eye in self.eyes(cell) {
+        for &eye in eyes {
             let mut ray = |a: f64, seen: &mut [bool], s: &mut SeedScratch| {
                 let d = DVec2::new(a.cos(), a.sin());
                 let (m, sig) = self.march(eye, z, d, Limit::NONE, seen, s);

@@ -32,7 +32,7 @@
 
 use super::occluders::{Axis, Decomposition};
 use super::plane::{local_rect, Rect};
-use crate::occluders::BucketGrid;
+use crate::occluders::{bucket_of, BucketGrid};
 use sightline_geom::{Aabb3, DVec2};
 
 /// Fine buckets of the occluder grid per cover cell, along each side.
@@ -95,13 +95,12 @@ impl Cover {
 
     #[inline]
     fn col(&self, x: f64) -> usize {
-        // `as` saturates: below the origin (and NaN) is column 0, as floor-then-clamp.
-        (((x - self.origin.x) / self.cell_m) as usize).min(self.nx - 1)
+        bucket_of(x, self.origin.x, self.cell_m, self.nx)
     }
 
     #[inline]
     fn row(&self, y: f64) -> usize {
-        (((y - self.origin.y) / self.cell_m) as usize).min(self.ny - 1)
+        bucket_of(y, self.origin.y, self.cell_m, self.ny)
     }
 
     /// Visit the boxes covering the cells over `[x0, x1]` whose rows meet `rows(cx0,

@@ -304,18 +304,7 @@ impl DualRay {
         let mut scratch = Scratch::default();
         let mut stats = TraversalStats::default();
         let mut out: Vec<u32> = self.always.clone();
-        let (seen, node_seen) = self.seed_marks(&a, &mut stats);
-        let mut aimer = Aimer {
-            eyes: if self.use_seed {
-                self.seed.eyes(&a)
-            } else {
-                Vec::new()
-            },
-            z: a.max.z,
-            seen,
-            node_seen,
-            scratch: SeedScratch::default(),
-        };
+        let mut aimer = self.seed_marks(&a, &mut stats);
         let mut strips = match self.tree.nodes.first() {
             Some(root) if self.use_vo => Some(Strips::new(&a, &root.bbox)),
             _ => None,
@@ -435,14 +424,25 @@ impl DualRay {
         Aabb3::new(cell.min - o3, cell.max - o3)
     }
 
-    /// The objects met first by the seed rays from `a` (local frame), and the kd-nodes
-    /// holding one of them (children come after their parent in `nodes`).
-    fn seed_marks(&self, a: &Aabb3, stats: &mut TraversalStats) -> (Vec<bool>, Vec<bool>) {
+    /// The objects met first by the seed rays from `a` (local frame) and the kd-nodes
+    /// holding one of them (children come after their parent in `nodes`), with the eyes
+    /// and scratch the aimed rays go on with.
+    fn seed_marks(&self, a: &Aabb3, stats: &mut TraversalStats) -> Aimer {
+        let mut aimer = Aimer {
+            eyes: Vec::new(),
+            z: a.max.z,
+            seen: Vec::new(),
+            node_seen: Vec::new(),
+            scratch: SeedScratch::default(),
+        };
         if !self.use_seed {
-            return (Vec::new(), Vec::new());
+            return aimer;
         }
+        aimer.eyes = self.seed.eyes(a);
         let mut seen = vec![false; self.scene.objects.len()];
-        stats.seeded = self.seed.mark(a, &mut seen, &mut SeedScratch::default()) as u64;
+        stats.seeded =
+            self.seed
+                .mark_from(&aimer.eyes, aimer.z, &mut seen, &mut aimer.scratch) as u64;
         let nodes = &self.tree.nodes;
         let mut node_seen = vec![false; nodes.len()];
         for n in (0..nodes.len()).rev() {
@@ -457,7 +457,9 @@ impl DualRay {
                     .any(|(id, _)| seen[*id as usize]),
             };
         }
-        (seen, node_seen)
+        aimer.seen = seen;
+        aimer.node_seen = node_seen;
+        aimer
     }
 
     /// The PVS of `cell` and of its 8 neighbours (the cells translated by ±1 cell size in
