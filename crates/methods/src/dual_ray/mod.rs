@@ -46,8 +46,8 @@
 //! are gathered first, with the hidden boxes over the whole shaft; their coverage may
 //! already settle "hidden"; else a witness ray from their gaps, checked along its own
 //! line through the rest of the shaft, settles "visible" for this axis; rays aimed at
-//! the node or object may settle "visible"; only then is the whole shaft gathered and
-//! tested.
+//! the node or object may settle "visible"; only then is the rest of the shaft gathered
+//! (the near pieces are kept) and the whole shaft tested.
 //!
 //! Degenerate configurations: boxes overlapping in both x and y (the cell inside a
 //! node, an object straddling the cell) have no separating planes and count as visible;
@@ -538,11 +538,7 @@ impl DualRay {
                 continue;
             };
             let decomp = self.decomposition(axis);
-            let mut hid = Hidden {
-                set: hidden,
-                axis,
-                reuse: false,
-            };
+            let hid = Hidden { set: hidden, axis };
             // First only the occluders next to the narrower box, where every ray of the
             // shaft converges: they often hide it on their own, at a fraction of the
             // cost (a subset covering is enough).
@@ -582,9 +578,13 @@ impl DualRay {
                     }
                 }
             }
-            // The near shaft just built (if any) is this one: same hidden pieces.
-            hid.reuse = near < len;
-            Planar::build(scratch, decomp, &pair, None, hid);
+            // The near shaft built last (unless the strips built their own) is extended
+            // to the whole shaft.
+            if near < len && strips.is_none() {
+                Planar::extend(scratch, decomp, hid);
+            } else {
+                Planar::build(scratch, decomp, &pair, None, hid);
+            }
             stats.planar_tests += 1;
             stats.pieces += scratch.planar.pieces.len() as u64;
             stats.hidden_pieces += scratch.planar.hidden_pieces as u64;

@@ -270,7 +270,7 @@ pub(crate) struct Scratch {
     pub candidates: Vec<(f64, f64, f64)>,
     /// Per hidden box, the last test that took it as a piece.
     pub hidden_stamps: Stamps,
-    /// The pieces of the hidden boxes of the last shaft built.
+    /// The pieces of the hidden boxes of the shaft being built.
     pub hidden_pieces: Vec<Piece>,
 }
 
@@ -280,16 +280,12 @@ pub(crate) struct Scratch {
 pub(crate) struct Hidden<'a> {
     pub set: Option<&'a HiddenSet>,
     pub axis: Axis,
-    /// The previous build of the scratch was the same shaft with the same set: its
-    /// hidden pieces are taken again.
-    pub reuse: bool,
 }
 
 impl Hidden<'_> {
     pub(crate) const NONE: Hidden<'static> = Hidden {
         set: None,
         axis: Axis::X,
-        reuse: false,
     };
 
     fn cover(&self) -> Option<&Cover> {
@@ -449,58 +445,108 @@ impl Planar {
         // coverage rows fastest.
         if let Some(set) = hidden.set {
             let cache = &mut scratch.hidden_pieces;
-            if !hidden.reuse {
-                cache.clear();
-                let hgen = scratch.hidden_stamps.next(set.boxes.len());
-                let stamps = &mut scratch.hidden_stamps.marks;
-                set.cover(hidden.axis).visit(
-                    (xa, xb),
-                    |cx0, cx1| (lower(cx0).min(lower(cx1)), upper(cx0).max(upper(cx1))),
-                    |cx0, cx1| ceiling.at(cx0).min(ceiling.at(cx1)),
-                    |id| {
-                        let st = &mut stamps[id as usize];
-                        if *st == hgen {
-                            return;
-                        }
-                        *st = hgen;
-                        let h = &set.boxes[id as usize];
-                        let r = local_rect(h, hidden.axis);
-                        let (cx0, cx1) = (r.x0.max(xa), r.x1.min(xb));
-                        if cx1 <= cx0 {
-                            return;
-                        }
-                        let Some((k0, k1)) = ceiling.below(h.max.z, cx0, cx1) else {
-                            return;
-                        };
-                        cache.push(Piece {
-                            x0: k0 - xa,
-                            x1: k1 - xa,
-                            yb0: r.y0 - yc,
-                            yb1: r.y0 - yc,
-                            yt0: r.y1 - yc,
-                            yt1: r.y1 - yc,
-                        });
-                    },
-                );
-            }
+            cache.clear();
+            let hgen = scratch.hidden_stamps.next(set.boxes.len());
+            let stamps = &mut scratch.hidden_stamps.marks;
+            set.cover(hidden.axis).visit(
+                (xa, xb),
+                |cx0, cx1| (lower(cx0).min(lower(cx1)), upper(cx0).max(upper(cx1))),
+                |cx0, cx1| ceiling.at(cx0).min(ceiling.at(cx1)),
+                |id| {
+                    let st = &mut stamps[id as usize];
+                    if *st == hgen {
+                        return;
+                    }
+                    *st = hgen;
+                    let h = &set.boxes[id as usize];
+                    let r = local_rect(h, hidden.axis);
+                    let (cx0, cx1) = (r.x0.max(xa), r.x1.min(xb));
+                    if cx1 <= cx0 {
+                        return;
+                    }
+                    let Some((k0, k1)) = ceiling.below(h.max.z, cx0, cx1) else {
+                        return;
+                    };
+                    cache.push(Piece {
+                        x0: k0 - xa,
+                        x1: k1 - xa,
+                        yb0: r.y0 - yc,
+                        yb1: r.y0 - yc,
+                        yt0: r.y1 - yc,
+                        yt1: r.y1 - yc,
+                    });
+                },
+            );
             let extra = cache.len();
             p.pieces.extend_from_slice(cache);
             p.pieces.rotate_right(extra);
             p.hidden_pieces = extra;
         }
-        let len = p.len;
-        p.duals.extend(p.pieces.iter().map(|q| DualPiece {
-            b: [Dual::new(q.x0, q.yb0, len), Dual::new(q.x1, q.yb1, len)],
-            t: [Dual::new(q.x0, q.yt0, len), Dual::new(q.x1, q.yt1, len)],
-        }));
-        for (i, d) in p.duals.iter().enumerate() {
+        p.prepare_from(0);
+    }
+
+    /// Extend the last [`Planar::build`], a partial gathering of this shaft, to the
+    /// whole shaft: only the slabs of the part not gathered yet are walked and cut (a
+    /// slab reaching into both parts yields a piece in each, the same union), and the
+    /// pieces already prepared are kept. The same pieces' union as a whole build.
+    pub(crate) fn extend(scratch: &mut Scratch, decomp: &Decomposition, hidden: Hidden<'_>) {
+        let p = &mut scratch.planar;
+        let (xa, xb, yc) = (p.xa, p.xb, p.yc);
+        let (u_lo, u_hi, w_lo, w_hi) = (p.u_lo, p.u_hi, p.w_lo, p.w_hi);
+        let ceiling = p.ceiling;
+        let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
+        let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
+        let first = p.pieces.len();
+        for (f0, f1) in [(xa, p.ga), (p.gb, xb)] {
+            if f1 <= f0 {
+                continue;
+            }
+            let gen = scratch.slab_stamps.next(decomp.slabs.len());
+            walk_slabs(
+                decomp,
+                (&mut scratch.slab_stamps.marks, gen),
+                (f0, f1),
+                &ceiling,
+                hidden.cover(),
+                |cx0, cx1| (lower(cx0).min(lower(cx1)), upper(cx0).max(upper(cx1))),
+                |slab, traps| {
+                    cut_slab(
+                        slab,
+                        traps,
+                        &ceiling,
+                        (xa, f0, f1),
+                        yc,
+                        &lower,
+                        &upper,
+                        &mut scratch.cuts,
+                        &mut scratch.kept,
+                        &mut p.pieces,
+                    );
+                    true
+                },
+            );
+        }
+        p.ga = xa;
+        p.gb = xb;
+        p.prepare_from(first);
+    }
+
+    /// The dual forms of the pieces from `first` on.
+    fn prepare_from(&mut self, first: usize) {
+        let len = self.len;
+        self.duals
+            .extend(self.pieces[first..].iter().map(|q| DualPiece {
+                b: [Dual::new(q.x0, q.yb0, len), Dual::new(q.x1, q.yb1, len)],
+                t: [Dual::new(q.x0, q.yt0, len), Dual::new(q.x1, q.yt1, len)],
+            }));
+        for (i, d) in self.duals.iter().enumerate().skip(first) {
             let [b0, b1] = d.b;
             let [t0, t1] = d.t;
             if b0.on_fb || b1.on_fb || t0.on_fb || t1.on_fb {
-                p.on_fb.push(i as u32);
-                p.lines.push([f64::NAN; 8]);
+                self.on_fb.push(i as u32);
+                self.lines.push([f64::NAN; 8]);
             } else {
-                p.lines.push([
+                self.lines.push([
                     b0.alpha, b0.beta, b1.alpha, b1.beta, t0.alpha, t0.beta, t1.alpha, t1.beta,
                 ]);
             }
