@@ -58,9 +58,11 @@ pub(crate) struct Stamps {
 impl Stamps {
     /// A new walk over ids `0..len`: its generation.
     pub(crate) fn next(&mut self, len: usize) -> u32 {
+        // Grown (geometrically: the hidden boxes grow during a traversal) with marks 0,
+        // older than any generation handed out after it.
         if self.marks.len() < len {
-            self.marks = vec![0; len];
-            self.gen = 0;
+            let n = len.max(2 * self.marks.len());
+            self.marks.resize(n, 0);
         }
         self.gen = self.gen.wrapping_add(1);
         if self.gen == 0 {

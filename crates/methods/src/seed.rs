@@ -598,23 +598,11 @@ fn crossings(edges: &[[DVec2; 2]], eye: DVec2, d: DVec2) -> Option<(f64, f64)> {
             continue;
         }
         let w = *a - eye;
-        // `s = w × d / den ∈ [0, 1]` and `t = w × e / den > 0`, without dividing
-        // unless the edge is crossed; the end `s = 1` widened by the rounding of the
-        // division, so that no crossing the quotient would find is lost (an extra one
-        // at a vertex only raises the horizon: fewer objects accepted).
-        let (sn, tn) = (w.perp_dot(d), w.perp_dot(e));
-        let end = den * (1.0 + 4.0 * f64::EPSILON);
-        let crossed = if den > 0.0 {
-            sn >= 0.0 && sn <= end && tn > 0.0
-        } else {
-            sn <= 0.0 && sn >= end && tn < 0.0
-        };
-        if crossed {
-            let t = tn / den;
-            if t > 0.0 {
-                best = best.min(t);
-                last = last.max(t);
-            }
+        let t = w.perp_dot(e) / den;
+        let s = w.perp_dot(d) / den;
+        if t > 0.0 && (0.0..=1.0).contains(&s) {
+            best = best.min(t);
+            last = last.max(t);
         }
     }
     best.is_finite().then_some((best, last))
