@@ -388,7 +388,6 @@ impl Planar {
             y0: r.y0 - yc,
             y1: r.y1 - yc,
         };
-        let gen = scratch.slab_stamps.next(decomp.slabs.len());
         let p = &mut scratch.planar;
         p.len = xb - xa;
         p.lo = to_local(&lo);
@@ -411,32 +410,10 @@ impl Planar {
         p.gb = gb;
         p.hidden_pieces = 0;
 
-        // Walk the grid columns between the faces, rows within the shaft's hull.
+        Planar::gather(scratch, decomp, (ga, gb), hidden.cover());
+        let p = &mut scratch.planar;
         let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
         let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
-        walk_slabs(
-            decomp,
-            (&mut scratch.slab_stamps.marks, gen),
-            (ga, gb),
-            &ceiling,
-            hidden.cover(),
-            |cx0, cx1| (lower(cx0).min(lower(cx1)), upper(cx0).max(upper(cx1))),
-            |slab, traps| {
-                cut_slab(
-                    slab,
-                    traps,
-                    &ceiling,
-                    (xa, ga, gb),
-                    yc,
-                    &lower,
-                    &upper,
-                    &mut scratch.cuts,
-                    &mut scratch.kept,
-                    &mut p.pieces,
-                );
-                true
-            },
-        );
         // Nearest the cell first: the coverage rows of `discrete` fill up early.
         if !cell_low {
             p.pieces.reverse();
@@ -490,45 +467,57 @@ impl Planar {
     /// slab reaching into both parts yields a piece in each, the same union), and the
     /// pieces already prepared are kept. The same pieces' union as a whole build.
     pub(crate) fn extend(scratch: &mut Scratch, decomp: &Decomposition, hidden: Hidden<'_>) {
-        let p = &mut scratch.planar;
-        let (xa, xb, yc) = (p.xa, p.xb, p.yc);
-        let (u_lo, u_hi, w_lo, w_hi) = (p.u_lo, p.u_hi, p.w_lo, p.w_hi);
-        let ceiling = p.ceiling;
-        let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
-        let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
-        let first = p.pieces.len();
-        for (f0, f1) in [(xa, p.ga), (p.gb, xb)] {
-            if f1 <= f0 {
-                continue;
+        let p = &scratch.planar;
+        let (xa, xb, first) = (p.xa, p.xb, p.pieces.len());
+        for range in [(xa, p.ga), (p.gb, xb)] {
+            if range.1 > range.0 {
+                Planar::gather(scratch, decomp, range, hidden.cover());
             }
-            let gen = scratch.slab_stamps.next(decomp.slabs.len());
-            walk_slabs(
-                decomp,
-                (&mut scratch.slab_stamps.marks, gen),
-                (f0, f1),
-                &ceiling,
-                hidden.cover(),
-                |cx0, cx1| (lower(cx0).min(lower(cx1)), upper(cx0).max(upper(cx1))),
-                |slab, traps| {
-                    cut_slab(
-                        slab,
-                        traps,
-                        &ceiling,
-                        (xa, f0, f1),
-                        yc,
-                        &lower,
-                        &upper,
-                        &mut scratch.cuts,
-                        &mut scratch.kept,
-                        &mut p.pieces,
-                    );
-                    true
-                },
-            );
         }
+        let p = &mut scratch.planar;
         p.ga = xa;
         p.gb = xb;
         p.prepare_from(first);
+    }
+
+    /// Walk the grid columns over `[f0, f1]` (rows within the shaft's hull), cut the
+    /// slabs met by the ceiling and clip them to `[f0, f1]` and the shaft: the pieces are
+    /// appended.
+    fn gather(
+        scratch: &mut Scratch,
+        decomp: &Decomposition,
+        (f0, f1): (f64, f64),
+        cover: Option<&Cover>,
+    ) {
+        let gen = scratch.slab_stamps.next(decomp.slabs.len());
+        let p = &mut scratch.planar;
+        let (xa, xb, yc, ceiling) = (p.xa, p.xb, p.yc, p.ceiling);
+        let (u_lo, u_hi, w_lo, w_hi) = (p.u_lo, p.u_hi, p.w_lo, p.w_hi);
+        let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
+        let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
+        walk_slabs(
+            decomp,
+            (&mut scratch.slab_stamps.marks, gen),
+            (f0, f1),
+            &ceiling,
+            cover,
+            |cx0, cx1| (lower(cx0).min(lower(cx1)), upper(cx0).max(upper(cx1))),
+            |slab, traps| {
+                cut_slab(
+                    slab,
+                    traps,
+                    &ceiling,
+                    (xa, f0, f1),
+                    yc,
+                    &lower,
+                    &upper,
+                    &mut scratch.cuts,
+                    &mut scratch.kept,
+                    &mut p.pieces,
+                );
+                true
+            },
+        );
     }
 
     /// The dual forms of the pieces from `first` on.
