@@ -425,8 +425,7 @@ impl DualRay {
     }
 
     /// The objects met first by the seed rays from `a` (local frame) and the kd-nodes
-    /// holding one of them (children come after their parent in `nodes`), with the eyes
-    /// and scratch the aimed rays go on with.
+    /// holding one of them, with the eyes and scratch the aimed rays go on with.
     fn seed_marks(&self, a: &Aabb3, stats: &mut TraversalStats) -> Aimer {
         let mut aimer = Aimer {
             eyes: Vec::new(),
@@ -439,26 +438,13 @@ impl DualRay {
             return aimer;
         }
         aimer.eyes = self.seed.eyes(a);
-        let mut seen = vec![false; self.scene.objects.len()];
+        aimer.seen = vec![false; self.scene.objects.len()];
+        aimer.node_seen = vec![false; self.tree.nodes.len()];
         stats.seeded =
             self.seed
-                .mark_from(&aimer.eyes, aimer.z, &mut seen, &mut aimer.scratch) as u64;
-        let nodes = &self.tree.nodes;
-        let mut node_seen = vec![false; nodes.len()];
-        for n in (0..nodes.len()).rev() {
-            node_seen[n] = match nodes[n].kind {
-                NodeKind::Inner { left, right } => {
-                    node_seen[left as usize] || node_seen[right as usize]
-                }
-                NodeKind::Leaf { first, len } => self
-                    .tree
-                    .leaf_items(first, len)
-                    .iter()
-                    .any(|(id, _)| seen[*id as usize]),
-            };
-        }
-        aimer.seen = seen;
-        aimer.node_seen = node_seen;
+                .mark_from(&aimer.eyes, aimer.z, &mut aimer.seen, &mut aimer.scratch)
+                as u64;
+        aimer.mark_nodes(self);
         aimer
     }
 
@@ -784,6 +770,22 @@ impl Aimer {
         self.box_visible(m, b, |s| s.node_seen[n as usize])
     }
 
+    /// Mark the kd-nodes above the leaves of the objects just marked (`scratch.marked`):
+    /// a node holding a visible object is visible. Each node is marked once, so the
+    /// cost follows the marked objects, not the tree.
+    fn mark_nodes(&mut self, m: &DualRay) {
+        for &id in &self.scratch.marked {
+            let (s, e) = (m.leaf_start[id as usize], m.leaf_start[id as usize + 1]);
+            for &leaf in &m.leaf_ids[s as usize..e as usize] {
+                let mut n = leaf;
+                while n != u32::MAX && !self.node_seen[n as usize] {
+                    self.node_seen[n as usize] = true;
+                    n = m.parent[n as usize];
+                }
+            }
+        }
+    }
+
     /// Aim at `b` from every eye until `done`.
     fn box_visible(&mut self, m: &DualRay, b: &Aabb3, done: impl Fn(&Aimer) -> bool) -> bool {
         if self.seen.is_empty() {
@@ -811,16 +813,7 @@ impl Aimer {
                 {
                     continue;
                 }
-                for &id in &self.scratch.marked {
-                    let (s, e) = (m.leaf_start[id as usize], m.leaf_start[id as usize + 1]);
-                    for &leaf in &m.leaf_ids[s as usize..e as usize] {
-                        let mut n = leaf;
-                        while n != u32::MAX && !self.node_seen[n as usize] {
-                            self.node_seen[n as usize] = true;
-                            n = m.parent[n as usize];
-                        }
-                    }
-                }
+                self.mark_nodes(m);
                 if done(self) {
                     return true;
                 }
