@@ -220,6 +220,70 @@ pub(crate) fn covers(iv: &mut [(f64, f64)], a: f64, b: f64, eps: f64) -> bool {
     false
 }
 
+/// The rays `(u, w)` of `RS` the pieces may leave free, as a hull `[u0, u1] × [w0, w1]`
+/// (`None`: the shaft is too narrow for the rows, or nothing is left free at `level`).
+///
+/// Over `level` equal bands, a column not `full` in a band that is not covered holds
+/// every ray a finer band or a larger set of pieces can leave free: a finer band only
+/// sees the intervals grow (`full` bits only appear), and a column that is `full` is
+/// covered `3·eps` deep, so no gap of the exact sweep lies in it. The hull is widened
+/// by a column and `3·eps` on each side in `u` and by `eps` in `w`. A piece whose
+/// interval meets no such column for the band of a free ray adds nothing to the
+/// coverage of that band, so a gathering restricted to the rays of the hull
+/// ([`super::plane::Planar::extend`]) covers exactly the rows the whole one covers.
+pub(crate) fn free_hull(scratch: &Scratch, level: u32) -> Option<[f64; 4]> {
+    let p = &scratch.planar;
+    let (w_lo, w_hi) = (p.w_lo, p.w_hi);
+    let span = p.u_hi - p.u_lo;
+    let m = 3.0 * p.eps;
+    if !(w_lo < w_hi) || !(span > 64.0 * m) {
+        return None;
+    }
+    let col = span / COLUMNS as f64;
+    let mut iv = Vec::new();
+    let mut hull: Option<[f64; 4]> = None;
+    for (w0, w1) in super::plane::bands_rev(w_lo, w_hi, level.max(1) as usize) {
+        let mut row = Rows {
+            u_lo: p.u_lo,
+            scale: COLUMNS as f64 / span,
+            m,
+            full: 0,
+            touch: 0,
+        };
+        iv.clear();
+        p.mask_band(w0, w1, &mut iv);
+        for &(lo, hi) in &iv {
+            row.add(lo, hi);
+        }
+        for i in 0..p.duals.len() {
+            let (lo, hi) = p.piece_band_fast(i, w0, w1);
+            row.add(lo, hi);
+        }
+        if row.full == u128::MAX {
+            continue;
+        }
+        let free = !row.full;
+        let j0 = free.trailing_zeros() as f64;
+        let j1 = (COLUMNS - 1 - free.leading_zeros()) as f64;
+        let b = [
+            p.u_lo + (j0 - 1.0) * col - m,
+            p.u_lo + (j1 + 2.0) * col + m,
+            w0 - p.eps,
+            w1 + p.eps,
+        ];
+        hull = Some(match hull {
+            None => b,
+            Some(h) => [
+                h[0].min(b[0]),
+                h[1].max(b[1]),
+                h[2].min(b[2]),
+                h[3].max(b[3]),
+            ],
+        });
+    }
+    hull
+}
+
 const ALL: u32 = u32::MAX;
 
 /// §5.2 with hierarchical refinement: `true` when every pixel of the `resolution`-row
@@ -425,6 +489,56 @@ mod tests {
             }
         }
         assert!(counts[0] > 100 && counts[1] > 100, "{counts:?}");
+    }
+
+    /// A shaft gathered near one box, then extended only over the rays its pieces may
+    /// leave free ([`free_hull`]), answers as the whole shaft at every resolution.
+    #[test]
+    fn extension_over_the_free_rays_answers_as_the_whole_shaft() {
+        let mut counts = [0usize; 2];
+        for (scene, cell) in [
+            (city(11, 300), [0.0, 0.0, 1.5, 20.0, 20.0, 2.0]),
+            (metropolis(5, 600), [210.0, 210.0, 0.0, 230.0, 230.0, 2.0]),
+            (metropolis(9, 900), [300.0, 400.0, 0.0, 360.0, 460.0, 2.0]),
+        ] {
+            let m = DualRay::new("dual-ray", Arc::new(scene), Planarity::Exact);
+            let o3 = m.origin.extend(0.0);
+            let a = Aabb3::new(
+                DVec3::new(cell[0], cell[1], cell[2]) - o3,
+                DVec3::new(cell[3], cell[4], cell[5]) - o3,
+            );
+            let mut scratch = Scratch::default();
+            for (_, b) in &m.tree.items {
+                for axis in [Axis::X, Axis::Y] {
+                    let Some(pair) = orient(&a, b, axis) else {
+                        continue; // not separated along this axis
+                    };
+                    let decomp = m.decomposition(axis);
+                    let len = pair.len();
+                    for (fraction, level) in [(0.1, 16), (0.3, 4)] {
+                        let near = if pair.narrow_lo() {
+                            fraction * len
+                        } else {
+                            -fraction * len
+                        };
+                        for res in [16, 128] {
+                            Planar::build(&mut scratch, decomp, &pair, Some(near), Hidden::NONE);
+                            if hidden(&mut scratch, res) {
+                                continue;
+                            }
+                            let rays = free_hull(&scratch, level);
+                            Planar::extend(&mut scratch, decomp, Hidden::NONE, rays);
+                            let restricted = hidden(&mut scratch, res);
+                            Planar::build(&mut scratch, decomp, &pair, None, Hidden::NONE);
+                            let whole = hidden(&mut scratch, res);
+                            assert_eq!(restricted, whole, "{cell:?} {b:?} {axis:?} {res}");
+                            counts[whole as usize] += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(counts[0] > 100 && counts[1] > 50, "{counts:?}");
     }
 
     #[test]

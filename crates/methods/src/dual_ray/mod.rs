@@ -47,7 +47,10 @@
 //! already settle "hidden"; else a witness ray from their gaps, checked along its own
 //! line through the rest of the shaft, settles "visible" for this axis; rays aimed at
 //! the node or object may settle "visible"; only then is the rest of the shaft gathered
-//! (the near pieces are kept) and the whole shaft tested.
+//! (the near pieces are kept) and the whole shaft tested — with the discrete test, only
+//! the slabs meeting the rays the near pieces leave free ([`discrete::free_hull`]):
+//! the others cannot change the answer, and at 1M buildings they are a third of the
+//! pieces.
 //!
 //! Degenerate configurations: boxes overlapping in both x and y (the cell inside a
 //! node, an object straddling the cell) have no separating planes and count as visible;
@@ -107,6 +110,10 @@ pub(crate) const DEFAULT_RESOLUTION: u32 = 128;
 /// 120 m tried: flat within noise).
 const FIRST_FRACTION: f64 = 0.1;
 const FIRST_MIN_M: f64 = 60.0;
+
+/// Bands of `RS` over which the rays the near pieces leave free are bounded before the
+/// rest of a shaft is gathered ([`discrete::free_hull`]).
+const FREE_LEVEL: u32 = 4;
 
 /// Strips of a cell ([`Strips`]): at least this wide (metres), at most this many.
 const STRIP_MIN_M: f64 = 20.0;
@@ -567,7 +574,12 @@ impl DualRay {
             // The near shaft built last (unless the strips built their own) is extended
             // to the whole shaft.
             if near < len && strips.is_none() {
-                Planar::extend(scratch, decomp, hid);
+                // Only the slabs meeting the rays the near pieces leave free.
+                let rays = match self.planarity {
+                    Planarity::Discrete { .. } => discrete::free_hull(scratch, FREE_LEVEL),
+                    Planarity::Exact => None,
+                };
+                Planar::extend(scratch, decomp, hid, rays);
             } else {
                 Planar::build(scratch, decomp, &pair, None, hid);
             }

@@ -410,7 +410,8 @@ impl Planar {
         p.gb = gb;
         p.hidden_pieces = 0;
 
-        Planar::gather(scratch, decomp, (ga, gb), hidden.cover());
+        let rays = [u_lo, u_hi, w_lo, w_hi];
+        Planar::gather(scratch, decomp, (ga, gb), rays, hidden.cover());
         let p = &mut scratch.planar;
         let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
         let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
@@ -466,12 +467,23 @@ impl Planar {
     /// whole shaft: only the slabs of the part not gathered yet are walked and cut (a
     /// slab reaching into both parts yields a piece in each, the same union), and the
     /// pieces already prepared are kept. The same pieces' union as a whole build.
-    pub(crate) fn extend(scratch: &mut Scratch, decomp: &Decomposition, hidden: Hidden<'_>) {
+    ///
+    /// With `rays`, a hull `[u0, u1] × [w0, w1]` of `RS` holding every ray the pieces
+    /// gathered so far may leave free ([`super::discrete::free_hull`]), only the slabs
+    /// meeting those rays are: the others block no ray that is not blocked already, so
+    /// every row of `RS` is covered exactly when the whole shaft covers it.
+    pub(crate) fn extend(
+        scratch: &mut Scratch,
+        decomp: &Decomposition,
+        hidden: Hidden<'_>,
+        rays: Option<[f64; 4]>,
+    ) {
         let p = &scratch.planar;
         let (xa, xb, first) = (p.xa, p.xb, p.pieces.len());
+        let rays = rays.unwrap_or([p.u_lo, p.u_hi, p.w_lo, p.w_hi]);
         for range in [(xa, p.ga), (p.gb, xb)] {
             if range.1 > range.0 {
-                Planar::gather(scratch, decomp, range, hidden.cover());
+                Planar::gather(scratch, decomp, range, rays, hidden.cover());
             }
         }
         let p = &mut scratch.planar;
@@ -480,19 +492,19 @@ impl Planar {
         p.prepare_from(first);
     }
 
-    /// Walk the grid columns over `[f0, f1]` (rows within the shaft's hull), cut the
-    /// slabs met by the ceiling and clip them to `[f0, f1]` and the shaft: the pieces are
-    /// appended.
+    /// Walk the grid columns over `[f0, f1]` (rows within the hull of the rays
+    /// `[u0, u1] × [w0, w1]` of `RS`), cut the slabs met by the ceiling and clip them to
+    /// `[f0, f1]`, dropping the pieces that miss those rays: the pieces are appended.
     fn gather(
         scratch: &mut Scratch,
         decomp: &Decomposition,
         (f0, f1): (f64, f64),
+        [u_lo, u_hi, w_lo, w_hi]: [f64; 4],
         cover: Option<&Cover>,
     ) {
         let gen = scratch.slab_stamps.next(decomp.slabs.len());
         let p = &mut scratch.planar;
         let (xa, xb, yc, ceiling) = (p.xa, p.xb, p.yc, p.ceiling);
-        let (u_lo, u_hi, w_lo, w_hi) = (p.u_lo, p.u_hi, p.w_lo, p.w_hi);
         let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
         let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
         walk_slabs(
