@@ -492,10 +492,11 @@ mod tests {
     }
 
     /// A shaft gathered near one box, then extended only over the rays its pieces may
-    /// leave free ([`free_hull`]), answers as the whole shaft at every resolution.
+    /// leave free ([`free_hull`]), to the whole shaft or to a larger part of it, answers
+    /// as that shaft or part gathered whole, at every resolution.
     #[test]
     fn extension_over_the_free_rays_answers_as_the_whole_shaft() {
-        let mut counts = [0usize; 2];
+        let mut counts = [0usize; 4];
         for (scene, cell) in [
             (city(11, 300), [0.0, 0.0, 1.5, 20.0, 20.0, 2.0]),
             (metropolis(5, 600), [210.0, 210.0, 0.0, 230.0, 230.0, 2.0]),
@@ -527,18 +528,27 @@ mod tests {
                                 continue;
                             }
                             let rays = free_hull(&scratch, level);
-                            Planar::extend(&mut scratch, decomp, Hidden::NONE, rays);
+                            Planar::extend(&mut scratch, decomp, Hidden::NONE, None, rays);
                             let restricted = hidden(&mut scratch, res);
                             Planar::build(&mut scratch, decomp, &pair, None, Hidden::NONE);
                             let whole = hidden(&mut scratch, res);
                             assert_eq!(restricted, whole, "{cell:?} {b:?} {axis:?} {res}");
                             counts[whole as usize] += 1;
+                            // The same from the near part to three times it.
+                            Planar::build(&mut scratch, decomp, &pair, Some(near), Hidden::NONE);
+                            let rays = free_hull(&scratch, level);
+                            let far = Some(3.0 * near);
+                            Planar::extend(&mut scratch, decomp, Hidden::NONE, far, rays);
+                            let restricted = hidden(&mut scratch, res);
+                            Planar::build(&mut scratch, decomp, &pair, far, Hidden::NONE);
+                            assert_eq!(restricted, hidden(&mut scratch, res), "{cell:?} {b:?}");
+                            counts[2 + restricted as usize] += 1;
                         }
                     }
                 }
             }
         }
-        assert!(counts[0] > 100 && counts[1] > 50, "{counts:?}");
+        assert!(counts.iter().all(|&c| c > 50), "{counts:?}");
     }
 
     #[test]

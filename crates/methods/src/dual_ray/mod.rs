@@ -107,7 +107,11 @@ pub(crate) const DEFAULT_RESOLUTION: u32 = 128;
 /// block), a kd-node wider than the cell by what stands around the cell. On the 100k
 /// metropolis this choice is 5–8 % faster than always the far box's end, which was
 /// 12–15 % faster than always the cell's (0.05, 0.1, 0.2, 0.25 of the length and 30, 60,
-/// 120 m tried: flat within noise).
+/// 120 m tried: flat within noise). It is gathered in two steps: first the occluders
+/// within [`FIRST_MIN_M`] of the box, then the rest of the fraction over the rays they
+/// leave free ([`discrete::free_hull`]) — on the 1M metropolis, half of the boxes
+/// kilometres away are hidden by the first 60 m (629 → 555 ms per cell; more steps, ×2.5
+/// to ×8 apart, tried: flat).
 const FIRST_FRACTION: f64 = 0.1;
 const FIRST_MIN_M: f64 = 60.0;
 
@@ -538,15 +542,27 @@ impl DualRay {
             let len = pair.len();
             let near = (len * FIRST_FRACTION).max(FIRST_MIN_M);
             if near < len {
-                let signed = if pair.narrow_lo() { near } else { -near };
-                Planar::build(scratch, decomp, &pair, Some(signed), hid);
-                stats.planar_tests += 1;
-                stats.pieces += scratch.planar.pieces.len() as u64;
-                stats.hidden_pieces += scratch.planar.hidden_pieces as u64;
+                let side = |d: f64| if pair.narrow_lo() { d } else { -d };
                 let res = match self.planarity {
                     Planarity::Discrete { resolution_px } => resolution_px,
                     Planarity::Exact => discrete::FIRST_LEVEL * 16,
                 };
+                // The box's own surroundings first, then the rest of the near part over
+                // the rays they leave free.
+                Planar::build(scratch, decomp, &pair, Some(side(FIRST_MIN_M)), hid);
+                stats.planar_tests += 1;
+                stats.pieces += scratch.planar.pieces.len() as u64;
+                stats.hidden_pieces += scratch.planar.hidden_pieces as u64;
+                if FIRST_MIN_M < near {
+                    if discrete::hidden(scratch, res) {
+                        stats.near_hidden += 1;
+                        return true;
+                    }
+                    let rays = self.free_rays(scratch);
+                    Planar::extend(scratch, decomp, hid, Some(side(near)), rays);
+                    stats.planar_tests += 1;
+                    stats.pieces += scratch.planar.pieces.len() as u64;
+                }
                 if discrete::hidden(scratch, res) {
                     stats.near_hidden += 1;
                     return true;
@@ -575,11 +591,8 @@ impl DualRay {
             // to the whole shaft.
             if near < len && strips.is_none() {
                 // Only the slabs meeting the rays the near pieces leave free.
-                let rays = match self.planarity {
-                    Planarity::Discrete { .. } => discrete::free_hull(scratch, FREE_LEVEL),
-                    Planarity::Exact => None,
-                };
-                Planar::extend(scratch, decomp, hid, rays);
+                let rays = self.free_rays(scratch);
+                Planar::extend(scratch, decomp, hid, None, rays);
             } else {
                 Planar::build(scratch, decomp, &pair, None, hid);
             }
@@ -601,6 +614,15 @@ impl DualRay {
 }
 
 impl DualRay {
+    /// The rays the pieces gathered so far may leave free, with the discrete test
+    /// ([`discrete::free_hull`]; `None`: all of them).
+    fn free_rays(&self, scratch: &Scratch) -> Option<[f64; 4]> {
+        match self.planarity {
+            Planarity::Discrete { .. } => discrete::free_hull(scratch, FREE_LEVEL),
+            Planarity::Exact => None,
+        }
+    }
+
     /// Whether every strip of the cell across `axis` is proven to have `m` hidden: by
     /// its virtual occluders, or by the occluders near the narrower box of its own shaft.
     fn strips_hide(

@@ -464,31 +464,39 @@ impl Planar {
     }
 
     /// Extend the last [`Planar::build`], a partial gathering of this shaft, to the
-    /// whole shaft: only the slabs of the part not gathered yet are walked and cut (a
-    /// slab reaching into both parts yields a piece in each, the same union), and the
-    /// pieces already prepared are kept. The same pieces' union as a whole build.
+    /// part `to` of the shaft (as `near` of [`Planar::build`]; `None`: the whole shaft):
+    /// only the slabs of the part not gathered yet are walked and cut (a slab reaching
+    /// into both parts yields a piece in each, the same union), and the pieces already
+    /// prepared are kept. The same pieces' union as a build of that part.
     ///
     /// With `rays`, a hull `[u0, u1] × [w0, w1]` of `RS` holding every ray the pieces
     /// gathered so far may leave free ([`super::discrete::free_hull`]), only the slabs
     /// meeting those rays are: the others block no ray that is not blocked already, so
-    /// every row of `RS` is covered exactly when the whole shaft covers it.
+    /// every row of `RS` is covered exactly when the whole part covers it.
     pub(crate) fn extend(
         scratch: &mut Scratch,
         decomp: &Decomposition,
         hidden: Hidden<'_>,
+        to: Option<f64>,
         rays: Option<[f64; 4]>,
     ) {
         let p = &scratch.planar;
         let (xa, xb, first) = (p.xa, p.xb, p.pieces.len());
+        let (na, nb) = match to {
+            Some(d) if d >= 0.0 => (xa, (xa + d).min(xb)),
+            Some(d) => ((xb + d).max(xa), xb),
+            None => (xa, xb),
+        };
+        let (ga, gb) = (p.ga, p.gb);
         let rays = rays.unwrap_or([p.u_lo, p.u_hi, p.w_lo, p.w_hi]);
-        for range in [(xa, p.ga), (p.gb, xb)] {
+        for range in [(na, ga), (gb, nb)] {
             if range.1 > range.0 {
                 Planar::gather(scratch, decomp, range, rays, hidden.cover());
             }
         }
         let p = &mut scratch.planar;
-        p.ga = xa;
-        p.gb = xb;
+        p.ga = ga.min(na);
+        p.gb = gb.max(nb);
         p.prepare_from(first);
     }
 
