@@ -230,7 +230,8 @@ pub(crate) fn covers(iv: &mut [(f64, f64)], a: f64, b: f64, eps: f64) -> bool {
 /// by a column and `3·eps` on each side in `u` and by `eps` in `w`. A piece whose
 /// interval meets no such column for the band of a free ray adds nothing to the
 /// coverage of that band, so a gathering restricted to the rays of the hull
-/// ([`super::plane::Planar::extend`]) covers exactly the rows the whole one covers.
+/// ([`super::plane::Planar::extend`]) covers exactly the rows the unrestricted one (the
+/// same parts, cut at the same lines) covers.
 pub(crate) fn free_hull(scratch: &Scratch, level: u32) -> Option<[f64; 4]> {
     let p = &scratch.planar;
     let (w_lo, w_hi) = (p.w_lo, p.w_hi);
@@ -491,12 +492,20 @@ mod tests {
         assert!(counts[0] > 100 && counts[1] > 100, "{counts:?}");
     }
 
-    /// A shaft gathered near one box, then extended only over the rays its pieces may
-    /// leave free ([`free_hull`]), to the whole shaft or to a larger part of it, answers
-    /// as that shaft or part gathered whole, at every resolution.
+    /// A shaft gathered near one box, then extended in steps — to a larger part, to the
+    /// whole shaft, or to the other end's part and then the middle — only over the rays
+    /// the pieces gathered so far may leave free ([`free_hull`]), answers as the same
+    /// steps over every ray, at every resolution; and is hidden only if the shaft
+    /// gathered whole is (a piece cut at a step's line `x = const` blocks the same rays
+    /// but covers less of a band on its own: §5.2's rows are per piece).
     #[test]
     fn extension_over_the_free_rays_answers_as_the_whole_shaft() {
-        let mut counts = [0usize; 4];
+        #[derive(Clone, Copy)]
+        enum Step {
+            To(Option<f64>),
+            OtherEnd(f64),
+        }
+        let mut counts = [0usize; 2];
         for (scene, cell) in [
             (city(11, 300), [0.0, 0.0, 1.5, 20.0, 20.0, 2.0]),
             (metropolis(5, 600), [210.0, 210.0, 0.0, 230.0, 230.0, 2.0]),
@@ -515,40 +524,50 @@ mod tests {
                         continue; // not separated along this axis
                     };
                     let decomp = m.decomposition(axis);
+                    let side = |d: f64| if pair.narrow_lo() { d } else { -d };
                     let len = pair.len();
                     for (fraction, level) in [(0.1, 16), (0.3, 4)] {
-                        let near = if pair.narrow_lo() {
-                            fraction * len
-                        } else {
-                            -fraction * len
-                        };
+                        let near = side(fraction * len);
                         for res in [16, 128] {
-                            Planar::build(&mut scratch, decomp, &pair, Some(near), Hidden::NONE);
-                            if hidden(&mut scratch, res) {
-                                continue;
-                            }
-                            let rays = free_hull(&scratch, level);
-                            Planar::extend(&mut scratch, decomp, Hidden::NONE, None, rays);
-                            let restricted = hidden(&mut scratch, res);
                             Planar::build(&mut scratch, decomp, &pair, None, Hidden::NONE);
                             let whole = hidden(&mut scratch, res);
-                            assert_eq!(restricted, whole, "{cell:?} {b:?} {axis:?} {res}");
-                            counts[whole as usize] += 1;
-                            // The same from the near part to three times it.
-                            Planar::build(&mut scratch, decomp, &pair, Some(near), Hidden::NONE);
-                            let rays = free_hull(&scratch, level);
-                            let far = Some(3.0 * near);
-                            Planar::extend(&mut scratch, decomp, Hidden::NONE, far, rays);
-                            let restricted = hidden(&mut scratch, res);
-                            Planar::build(&mut scratch, decomp, &pair, far, Hidden::NONE);
-                            assert_eq!(restricted, hidden(&mut scratch, res), "{cell:?} {b:?}");
-                            counts[2 + restricted as usize] += 1;
+                            for steps in [
+                                &[Step::To(None)][..],
+                                &[Step::To(Some(3.0 * near))],
+                                &[Step::OtherEnd(0.5 * fraction * len), Step::To(None)],
+                            ] {
+                                let mut answers = [false; 2];
+                                for (restrict, answer) in answers.iter_mut().enumerate() {
+                                    let s = &mut scratch;
+                                    Planar::build(s, decomp, &pair, Some(near), Hidden::NONE);
+                                    for &step in steps {
+                                        let rays =
+                                            (restrict == 1).then(|| free_hull(s, level)).flatten();
+                                        match step {
+                                            Step::To(to) => {
+                                                Planar::extend(s, decomp, Hidden::NONE, to, rays)
+                                            }
+                                            Step::OtherEnd(o) => Planar::extend_other_end(
+                                                s,
+                                                decomp,
+                                                Hidden::NONE,
+                                                o,
+                                                rays,
+                                            ),
+                                        }
+                                    }
+                                    *answer = hidden(s, res);
+                                }
+                                assert_eq!(answers[0], answers[1], "{cell:?} {b:?} {axis:?} {res}");
+                                assert!(!answers[0] || whole, "{cell:?} {b:?} {axis:?} {res}");
+                                counts[answers[0] as usize] += 1;
+                            }
                         }
                     }
                 }
             }
         }
-        assert!(counts.iter().all(|&c| c > 50), "{counts:?}");
+        assert!(counts[0] > 1000 && counts[1] > 1000, "{counts:?}");
     }
 
     #[test]

@@ -43,14 +43,15 @@
 //!   cell); they only drop provably hidden nodes.
 //!
 //! Order of one box-to-box test along an axis: the occluders next to the narrower box
-//! are gathered first, with the hidden boxes over the whole shaft; their coverage may
-//! already settle "hidden"; else a witness ray from their gaps, checked along its own
-//! line through the rest of the shaft, settles "visible" for this axis; rays aimed at
-//! the node or object may settle "visible"; only then is the rest of the shaft gathered
-//! (the near pieces are kept) and the whole shaft tested — with the discrete test, only
-//! the slabs meeting the rays the near pieces leave free ([`discrete::free_hull`]):
-//! the others cannot change the answer, and at 1M buildings they are a third of the
-//! pieces.
+//! are gathered first (within 60 m, then within a tenth of the shaft), with the hidden
+//! boxes over the whole shaft; their coverage may already settle "hidden"; else a
+//! witness ray from their gaps, checked along its own line through the rest of the
+//! shaft, settles "visible" for this axis; rays aimed at the node or object may settle
+//! "visible"; only then is the rest of the shaft gathered (the pieces gathered so far
+//! are kept): the part at the other end, then the middle, each tested. With the
+//! discrete test every step after the first gathers only the slabs meeting the rays the
+//! pieces so far leave free ([`discrete::free_hull`]): the others cannot change the
+//! answer, and on the 1M metropolis they are most of the pieces.
 //!
 //! Degenerate configurations: boxes overlapping in both x and y (the cell inside a
 //! node, an object straddling the cell) have no separating planes and count as visible;
@@ -114,6 +115,14 @@ pub(crate) const DEFAULT_RESOLUTION: u32 = 128;
 /// to ×8 apart, tried: flat).
 const FIRST_FRACTION: f64 = 0.1;
 const FIRST_MIN_M: f64 = 60.0;
+
+/// When the near part leaves a shaft open, the part of this fraction of its length at
+/// the other end is gathered next (over the rays left free), before the middle: rays
+/// from a cell wider than the street run inside the blocks beside it and are stopped
+/// next to the cell, not next to a box kilometres away. On the 1M metropolis 551 → 506
+/// ms per cell (0.005, 0.01, 0.02, 0.1, 0.3 tried: 539, 532, 516, 518, 574 ms); flat on
+/// the 150k one.
+const END_FRACTION: f64 = 0.05;
 
 /// Bands of `RS` over which the rays the near pieces leave free are bounded before the
 /// rest of a shaft is gathered ([`discrete::free_hull`]).
@@ -590,7 +599,23 @@ impl DualRay {
             // The near shaft built last (unless the strips built their own) is extended
             // to the whole shaft.
             if near < len && strips.is_none() {
-                // Only the slabs meeting the rays the near pieces leave free.
+                // The rest over the rays the near pieces leave free: first the part at
+                // the other end (a ray running inside the blocks beside a street is
+                // stopped there), then the middle.
+                let p = &scratch.planar;
+                let end = len * END_FRACTION;
+                if let Planarity::Discrete { resolution_px } = self.planarity {
+                    if end + (p.gb - p.ga) < len {
+                        let rays = self.free_rays(scratch);
+                        Planar::extend_other_end(scratch, decomp, hid, end, rays);
+                        stats.planar_tests += 1;
+                        stats.pieces += scratch.planar.pieces.len() as u64;
+                        if discrete::hidden(scratch, resolution_px) {
+                            stats.full_hidden += 1;
+                            return true;
+                        }
+                    }
+                }
                 let rays = self.free_rays(scratch);
                 Planar::extend(scratch, decomp, hid, None, rays);
             } else {

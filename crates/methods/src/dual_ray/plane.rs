@@ -223,6 +223,8 @@ pub(crate) struct Planar {
     pub ceiling: Ceiling,
     pub ga: f64,
     pub gb: f64,
+    /// A part `[e0, e1]` at the other end of `[xa, xb]` gathered too (empty: `e1 ≤ e0`).
+    pub ends: (f64, f64),
     /// How many of `pieces` (the first ones) are hidden boxes.
     pub hidden_pieces: usize,
 }
@@ -408,6 +410,7 @@ impl Planar {
         p.ceiling = ceiling;
         p.ga = ga;
         p.gb = gb;
+        p.ends = (0.0, 0.0);
         p.hidden_pieces = 0;
 
         let rays = [u_lo, u_hi, w_lo, w_hi];
@@ -467,12 +470,12 @@ impl Planar {
     /// part `to` of the shaft (as `near` of [`Planar::build`]; `None`: the whole shaft):
     /// only the slabs of the part not gathered yet are walked and cut (a slab reaching
     /// into both parts yields a piece in each, the same union), and the pieces already
-    /// prepared are kept. The same pieces' union as a build of that part.
+    /// prepared are kept.
     ///
     /// With `rays`, a hull `[u0, u1] × [w0, w1]` of `RS` holding every ray the pieces
     /// gathered so far may leave free ([`super::discrete::free_hull`]), only the slabs
     /// meeting those rays are: the others block no ray that is not blocked already, so
-    /// every row of `RS` is covered exactly when the whole part covers it.
+    /// every row of `RS` is covered exactly when it is with all of them.
     pub(crate) fn extend(
         scratch: &mut Scratch,
         decomp: &Decomposition,
@@ -481,23 +484,72 @@ impl Planar {
         rays: Option<[f64; 4]>,
     ) {
         let p = &scratch.planar;
-        let (xa, xb, first) = (p.xa, p.xb, p.pieces.len());
+        let (xa, xb) = (p.xa, p.xb);
         let (na, nb) = match to {
             Some(d) if d >= 0.0 => (xa, (xa + d).min(xb)),
             Some(d) => ((xb + d).max(xa), xb),
             None => (xa, xb),
         };
         let (ga, gb) = (p.ga, p.gb);
+        let mut ranges = [(na, ga), (gb, nb)];
+        // Less the other end's part, if gathered: it lies at `xa` or at `xb`.
+        let (e0, e1) = p.ends;
+        if e1 > e0 {
+            for r in &mut ranges {
+                if e0 <= r.0 {
+                    r.0 = r.0.max(e1);
+                }
+                if e1 >= r.1 {
+                    r.1 = r.1.min(e0);
+                }
+            }
+        }
+        Planar::gather_parts(scratch, decomp, hidden, &ranges, rays);
+        let p = &mut scratch.planar;
+        p.ga = ga.min(na);
+        p.gb = gb.max(nb);
+        if p.ga <= e0 && e1 <= p.gb {
+            p.ends = (0.0, 0.0);
+        }
+    }
+
+    /// Gather the part of length `len` at the other end of the shaft from `[ga, gb]`
+    /// (`[ga, gb]` must hold one end), over `rays` as [`Planar::extend`].
+    pub(crate) fn extend_other_end(
+        scratch: &mut Scratch,
+        decomp: &Decomposition,
+        hidden: Hidden<'_>,
+        len: f64,
+        rays: Option<[f64; 4]>,
+    ) {
+        let p = &scratch.planar;
+        let end = if p.ga > p.xa {
+            (p.xa, (p.xa + len).min(p.ga))
+        } else {
+            ((p.xb - len).max(p.gb), p.xb)
+        };
+        Planar::gather_parts(scratch, decomp, hidden, &[end], rays);
+        scratch.planar.ends = end;
+    }
+
+    /// Gather `ranges` (parts of the shaft not gathered yet, empty ones skipped) over
+    /// `rays` (`None`: every ray of the shaft) and prepare their pieces.
+    fn gather_parts(
+        scratch: &mut Scratch,
+        decomp: &Decomposition,
+        hidden: Hidden<'_>,
+        ranges: &[(f64, f64)],
+        rays: Option<[f64; 4]>,
+    ) {
+        let p = &scratch.planar;
+        let first = p.pieces.len();
         let rays = rays.unwrap_or([p.u_lo, p.u_hi, p.w_lo, p.w_hi]);
-        for range in [(na, ga), (gb, nb)] {
+        for &range in ranges {
             if range.1 > range.0 {
                 Planar::gather(scratch, decomp, range, rays, hidden.cover());
             }
         }
-        let p = &mut scratch.planar;
-        p.ga = ga.min(na);
-        p.gb = gb.max(nb);
-        p.prepare_from(first);
+        scratch.planar.prepare_from(first);
     }
 
     /// Walk the grid columns over `[f0, f1]` (rows within the hull of the rays
