@@ -50,7 +50,7 @@
 //! "visible"; only then is the rest of the shaft gathered (the pieces gathered so far
 //! are kept): the part at the other end, then the middle, each tested. With the
 //! discrete test every step after the first gathers only the slabs meeting the rays the
-//! pieces so far leave free ([`discrete::free_hull`]): the others cannot change the
+//! pieces so far leave free (`discrete::free_hull`): the others cannot change the
 //! answer, and on the 1M metropolis they are most of the pieces.
 //!
 //! Degenerate configurations: boxes overlapping in both x and y (the cell inside a

@@ -27,7 +27,7 @@
 //!   each direction only as far as the tests asked of it need, each test only until
 //!   its answer is known (§7 "Scaling"); occludees with outer coverage and nearest
 //!   depth.
-//! * [`crate::seed`]: objects met first by exact rays from a few eyes of the cell are
+//! * `crate::seed`: objects met first by exact rays from a few eyes of the cell are
 //!   in the PVS without a test (the erosion would keep them anyway; no PVS changes).
 //!
 //! Hierarchy (§7 "Bad scenario" and "Viewcells"): Theorem 1 erodes every occluder by
@@ -143,7 +143,7 @@ pub struct ErosionMethod {
     /// Eroded occluders per (cell half size in µm, element, fill threshold in dm), with
     /// the tick of their last use (least recently used evicted beyond `CACHE_BYTES`).
     cache: Mutex<(u64, ErodedCache)>,
-    /// Seed rays ([`crate::seed`]) in a frame centred at `origin`; `use_seed` turns them
+    /// Seed rays (`crate::seed`) in a frame centred at `origin`; `use_seed` turns them
     /// on (the default) or off: the PVS is the same.
     seed: SeedGrid,
     origin: DVec2,
@@ -262,7 +262,7 @@ impl ErosionMethod {
         })
     }
 
-    /// Turn the seed rays ([`crate::seed`]) on or off (on by default). The PVS is the
+    /// Turn the seed rays (`crate::seed`) on or off (on by default). The PVS is the
     /// same: the seed only spares the tests of objects a ray from the cell reaches.
     pub fn with_seed(mut self, on: bool) -> Self {
         self.use_seed = on;

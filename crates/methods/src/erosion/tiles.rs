@@ -20,7 +20,7 @@
 //! [`MinPyramid::min_over`] returns on the whole eroded raster, hence the same blockers
 //! and the same PVS.
 //!
-//! **Upper bounds without eroding.** The march only uses [`TiledErosion::max_over`] to
+//! **Upper bounds without eroding.** The march only uses [`TiledErosion::max_at_most`] to
 //! skip runs of sectors that cannot give a blocker (any upper bound gives the same
 //! blockers, a looser one skips less). Over tiles not eroded yet it bounds the eroded
 //! field by the un-eroded one, translated: every step is a minimum over offsets that
