@@ -5,7 +5,7 @@
 //!   over every viewcell in parallel, appends each finished cell to a checksummed journal
 //!   (so `--resume` after a crash recomputes nothing and loses nothing) and writes the
 //!   final file atomically.
-//! * [`format`] encodes the cells' sets as *delta-PVS* (Durand et al. 2000, §6.1: key
+//! * [`mod@format`] encodes the cells' sets as *delta-PVS* (Durand et al. 2000, §6.1: key
 //!   cells stored whole, every other cell as its difference with a neighbouring cell),
 //!   roaring bitmaps compressed with zstd in small blocks, a checksum per section and
 //!   per block. The layout is documented in `docs/pvs-format.md`.

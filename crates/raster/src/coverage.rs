@@ -350,7 +350,7 @@ pub(crate) fn for_row_depths(
     }
 }
 
-/// Which depth a rule writes (see [`Prepared::row_depths`]).
+/// Which depth a rule writes (see `Prepared::row_depths`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Depth {
     Centre,

@@ -121,7 +121,7 @@ impl DepthPyramid {
 
     /// Whether a convex world polygon (e.g. a triangle of an occludee), drawn with the
     /// outer rule at its nearest depth, is hidden in `view` (see
-    /// [`Framebuffer::polygon_occluded`] for the exact semantics).
+    /// [`crate::framebuffer::Framebuffer::polygon_occluded`] for the exact semantics).
     pub fn polygon_occluded(&self, view: &View, poly: &[DVec3]) -> bool {
         let (w, h) = self.size();
         occluded_test(view, poly, w, h, &self.levels[0].max, Some(self))
