@@ -121,8 +121,9 @@ pub(crate) struct SeedGrid {
     bucket_top: Vec<f64>,
     /// Tallest prism top.
     max_top: f64,
-    /// Footprint bounds per prism, slightly widened ([`widened`]).
-    boxes: Vec<(DVec2, DVec2)>,
+    /// Footprint bounds of the prism of each entry of `grid.ids`, as centre and half
+    /// extent, slightly widened ([`widened`]): a bucket's boxes lie together.
+    bucket_boxes: Vec<(DVec2, DVec2)>,
     /// Whether a prism whose box the ray misses is passed without its edges (off only
     /// to compare).
     pub(crate) cull_boxes: bool,
@@ -219,12 +220,15 @@ impl SeedGrid {
         });
         let bucket_top = grid.max_per_bucket(|i| prisms[i as usize].reach());
         SeedGrid {
+            bucket_boxes: {
+                let boxes = widened(boxes);
+                grid.ids.iter().map(|&i| boxes[i as usize]).collect()
+            },
             max_top: prisms.iter().map(|p| p.reach()).fold(0.0, f64::max),
             prisms,
             edges,
             grid,
             bucket_top,
-            boxes: widened(boxes),
             cull_boxes: true,
         }
     }
@@ -426,7 +430,7 @@ impl SeedGrid {
         }
         let start = eye + d * t_in;
         let (mut c, mut r) = (self.grid.col(start.x) as i64, self.grid.row(start.y) as i64);
-        let inv = DVec2::ONE / d;
+        let n = DVec2::new(-d.y, d.x);
         let step_c: i64 = if d.x > 0.0 { 1 } else { -1 };
         let step_r: i64 = if d.y > 0.0 { 1 } else { -1 };
         let next = |idx: i64, step: i64, o: f64, p: f64, dd: f64| -> f64 {
@@ -466,12 +470,18 @@ impl SeedGrid {
             // slope to a top under the eye is highest at the bucket's far end).
             let top = self.bucket_top[b] - z;
             let reach = if top >= 0.0 { top / t0 } else { top / t1 };
-            let bucket = if t0 > 0.0 && horizon >= reach {
-                &[][..]
+            let entries = if t0 > 0.0 && horizon >= reach {
+                0..0
             } else {
-                self.grid.bucket(c as usize, r as usize)
+                self.grid.start[b] as usize..self.grid.start[b + 1] as usize
             };
-            for &i in bucket {
+            for k in entries {
+                // Most prisms of a bucket stand beside the ray: their box, stored with
+                // the bucket, says so at once.
+                if self.cull_boxes && misses_box(self.bucket_boxes[k], eye, n) {
+                    continue;
+                }
+                let i = self.grid.ids[k];
                 if s.stamps.marks[i as usize] == gen {
                     continue;
                 }
@@ -480,14 +490,7 @@ impl SeedGrid {
                 if !occludee && !p.occludes() {
                     continue;
                 }
-                // Most prisms of a bucket stand beside the ray: their box says so at
-                // the cost of one edge.
-                let crossed = if self.cull_boxes && misses_box(self.boxes[i as usize], eye, d, inv)
-                {
-                    None
-                } else {
-                    crossings(self.prism_edges(p), eye, d)
-                };
+                let crossed = crossings(self.prism_edges(p), eye, d);
                 let Some((t, t_last)) = crossed else {
                     s.stamps.marks[i as usize] = gen; // the ray never enters it
                     continue;
@@ -551,39 +554,27 @@ impl SeedGrid {
 }
 
 /// `boxes` widened by a millionth of the scene's extent, far above the rounding of
-/// [`crossings`]: a ray missing a widened box crosses none of its edges.
-fn widened(mut boxes: Vec<(DVec2, DVec2)>) -> Vec<(DVec2, DVec2)> {
+/// [`crossings`] and of [`misses_box`] (a ray missing a widened box crosses none of its
+/// edges), as centre and half extent.
+fn widened(boxes: Vec<(DVec2, DVec2)>) -> Vec<(DVec2, DVec2)> {
     let reach = boxes
         .iter()
         .map(|(a, b)| a.abs().max(b.abs()).max_element())
         .fold(1.0, f64::max);
     let margin = DVec2::splat(1e-6 * reach);
-    for (a, b) in &mut boxes {
-        *a -= margin;
-        *b += margin;
-    }
     boxes
+        .into_iter()
+        .map(|(a, b)| (0.5 * (a + b), 0.5 * (b - a) + margin))
+        .collect()
 }
 
-/// Whether the ray `eye + t·d` (t > 0, `inv = 1 / d`) misses the box `(min, max)`.
+/// Whether the line through `eye` with normal `n` (the ray's direction turned by a
+/// right angle) misses the box of centre `c` and half extent `h`: the box's distance to
+/// the line exceeds its half width across it. A box behind the eye may pass; its edges
+/// are then tested ([`crossings`] keeps only `t > 0`).
 #[inline]
-fn misses_box((min, max): (DVec2, DVec2), eye: DVec2, d: DVec2, inv: DVec2) -> bool {
-    let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
-    for (lo, hi, p, dd, iv) in [
-        (min.x, max.x, eye.x, d.x, inv.x),
-        (min.y, max.y, eye.y, d.y, inv.y),
-    ] {
-        if dd == 0.0 {
-            if p < lo || p > hi {
-                return true;
-            }
-        } else {
-            let (a, b) = ((lo - p) * iv, (hi - p) * iv);
-            t0 = t0.max(a.min(b));
-            t1 = t1.min(a.max(b));
-        }
-    }
-    t0 > t1
+fn misses_box((c, h): (DVec2, DVec2), eye: DVec2, n: DVec2) -> bool {
+    (c - eye).dot(n).abs() > h.dot(n.abs())
 }
 
 /// Distances along the ray `eye + t·d` (t > 0) to the first and the last crossing of an
