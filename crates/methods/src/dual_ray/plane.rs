@@ -266,6 +266,11 @@ pub(crate) struct Scratch {
     /// Refinement of `discrete::hidden`: bands and their piece lists.
     pub refine: Vec<Band>,
     pub lists: Vec<u32>,
+    /// Bands `[w0, w1]` of `RS` that `discrete::hidden` found covered on the shaft being
+    /// built (ascending, disjoint): pieces are only added to a shaft, so they stay
+    /// covered when it is extended. Cleared by [`Planar::build`].
+    pub covered: Vec<(f64, f64)>,
+    pub covered_next: Vec<(f64, f64)>,
     /// Pieces of the ungathered part of a shaft, met by a candidate ray.
     pub far: Vec<Piece>,
     /// Candidate rays `(gap width, u, w)`.
@@ -400,6 +405,8 @@ impl Planar {
         p.w_lo = w_lo;
         p.w_hi = w_hi;
         p.eps = 1e-9 * (1.0 + (u_hi - u_lo).max(w_hi - w_lo).max(p.len));
+        scratch.covered.clear();
+        let p = &mut scratch.planar;
         p.pieces.clear();
         p.duals.clear();
         p.lines.clear();
