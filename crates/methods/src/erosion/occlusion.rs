@@ -294,7 +294,8 @@ struct BinMarch {
     next: usize,
     /// Length of the next attempt to skip a run of sectors.
     run: usize,
-    /// Blockers of the coarse map's bin merged into `stairs` so far.
+    /// Blockers of the coarse map's bin merged into `stairs` so far (a prefix of its
+    /// staircase: an unseeded map's only grows at the end).
     seeded: usize,
 }
 
@@ -331,9 +332,13 @@ impl PolarMap {
     /// is kept iff it is higher than every blocker no farther, and the staircase keeps
     /// the blockers no other is both nearer and higher than — the Pareto front of the
     /// seeds and the kept sectors, whatever the order of insertion.
+    ///
+    /// `coarse` must not be seeded itself (else it is not used): an unseeded map marches
+    /// each bin outwards, so its staircase only grows at the end, and the finer bin
+    /// merges only the blockers appended since it last looked (`BinMarch::seeded`).
     pub fn seeded(bins: Bins, coarse: PolarMap) -> Self {
         let mut m = PolarMap::new(bins);
-        if coarse.bins.n > 0 && m.bins.n.is_multiple_of(coarse.bins.n) {
+        if coarse.coarse.is_none() && coarse.bins.n > 0 && m.bins.n.is_multiple_of(coarse.bins.n) {
             m.coarse = Some(Box::new(coarse));
         }
         m
