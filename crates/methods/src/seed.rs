@@ -219,11 +219,10 @@ impl SeedGrid {
             per.max(ext.x.max(ext.y) / 4096.0).max(4.0)
         });
         let bucket_top = grid.max_per_bucket(|i| prisms[i as usize].reach());
+        let boxes = widened(boxes);
+        let bucket_boxes = grid.ids.iter().map(|&i| boxes[i as usize]).collect();
         SeedGrid {
-            bucket_boxes: {
-                let boxes = widened(boxes);
-                grid.ids.iter().map(|&i| boxes[i as usize]).collect()
-            },
+            bucket_boxes,
             max_top: prisms.iter().map(|p| p.reach()).fold(0.0, f64::max),
             prisms,
             edges,

@@ -395,6 +395,7 @@ impl Planar {
             y0: r.y0 - yc,
             y1: r.y1 - yc,
         };
+        scratch.covered.clear();
         let p = &mut scratch.planar;
         p.len = xb - xa;
         p.lo = to_local(&lo);
@@ -405,8 +406,6 @@ impl Planar {
         p.w_lo = w_lo;
         p.w_hi = w_hi;
         p.eps = 1e-9 * (1.0 + (u_hi - u_lo).max(w_hi - w_lo).max(p.len));
-        scratch.covered.clear();
-        let p = &mut scratch.planar;
         p.pieces.clear();
         p.duals.clear();
         p.lines.clear();
