@@ -18,6 +18,8 @@
 //! * `crate::kdtree` — the hierarchical subdivision of the occludees (§3): a node hidden
 //!   from the cell stops the recursion; objects of visible leaves are tested one by one
 //!   (their outer prisms' boxes); the nearer child first (front to back);
+//!   a kd-node below a node its test left visible is tested only every
+//!   [`TEST_EVERY_OPEN`]-th level (see there);
 //! * `hidden` — every box proven hidden becomes an occluder of the later tests (its
 //!   column is hidden, so it acts as a virtual occluder in the sense of Koltun et al.
 //!   2000): a few large boxes stand for the thousands of slabs a long shaft crosses, and
@@ -134,6 +136,18 @@ const MAX_STRIPS: usize = 4;
 
 /// An object with more outer prisms than this is tested by its single bounding box.
 const MAX_BOXES_PER_OBJECT: usize = 8;
+
+/// Below a kd-node its test did not hide, a node (inner or leaf) is tested only at
+/// every `TEST_EVERY_OPEN`-th level of the run of such nodes; the others go straight to
+/// their children (a leaf's to its objects). A node under a visible one is itself most
+/// often visible — far away, a child's shaft is nearly its parent's — and a visible
+/// answer is the dearest: the whole shaft gathered for nothing. Skipping a test never
+/// drops an object (only a test proving hidden does), so the PVS keeps its guarantee;
+/// it may differ by the odd object, as a leaf's box and its objects' boxes are tested
+/// with different ceilings. 1M metropolis, 4 cells: 1,596 → 1,355 ms of CPU (one object
+/// more in one cell); 150k, 25 cells: median 86.1 → 79.0 ms (one more in one cell);
+/// testing at every third level: flat.
+const TEST_EVERY_OPEN: u32 = 2;
 
 /// Which planar algorithm answers the box-to-box tests.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -329,19 +343,24 @@ impl DualRay {
             Some(root) if self.use_vo => Some(Strips::new(&a, &root.bbox)),
             _ => None,
         };
-        let mut stack: Vec<u32> = Vec::new();
+        // (node, levels in a row above it its test or the rule left visible).
+        let mut stack: Vec<(u32, u32)> = Vec::new();
         let mut hidden = self
             .use_hidden
             .then(|| HiddenSet::new(&self.decomp_x, &self.decomp_y));
         if !self.tree.nodes.is_empty() {
-            stack.push(0);
+            stack.push((0, 0));
         }
-        while let Some(n) = stack.pop() {
+        while let Some((n, open)) = stack.pop() {
             let node = &self.tree.nodes[n as usize];
             let known = aimer.node_seen.get(n as usize).copied().unwrap_or(false);
+            let test = !known && open.is_multiple_of(TEST_EVERY_OPEN);
+            // A node seen by the seed resets the run: its children were not left open
+            // by a test.
+            let open = if known { 0 } else { open + 1 };
             match node.kind {
                 NodeKind::Inner { left, right } => {
-                    if !known
+                    if test
                         && self.hidden_node(
                             &a,
                             &node.bbox,
@@ -361,17 +380,17 @@ impl DualRay {
                     // hidden occludes the farther one.
                     let d = |c: u32| gap2(&a, &self.tree.nodes[c as usize].bbox);
                     if d(left) <= d(right) {
-                        stack.push(right);
-                        stack.push(left);
+                        stack.push((right, open));
+                        stack.push((left, open));
                     } else {
-                        stack.push(left);
-                        stack.push(right);
+                        stack.push((left, open));
+                        stack.push((right, open));
                     }
                 }
                 NodeKind::Leaf { first, len } => {
                     let items = self.tree.leaf_items(first, len);
                     // A leaf of one box is the object's own test.
-                    if !known
+                    if test
                         && items.len() > 1
                         && self.hidden_node(
                             &a,
