@@ -531,7 +531,9 @@ impl ErosionMethod {
                 seeds: None,
                 memo: &mut memo,
             };
-            self.decide_at(&self.fine, cell, rect, undecided, visible, pass);
+            for (_, m) in self.decide_at(&self.fine, cell, rect, undecided, visible, pass) {
+                m.recycle();
+            }
             return;
         }
         let mut maybe = Vec::new();
@@ -541,7 +543,7 @@ impl ErosionMethod {
         };
         let coarse_maps = self.decide_at(&self.coarse, cell, rect, undecided, &mut maybe, pass);
         let mut hidden = std::mem::take(undecided);
-        self.decide_at(
+        let fine_maps = self.decide_at(
             &self.fine,
             cell,
             rect,
@@ -552,6 +554,9 @@ impl ErosionMethod {
                 memo: &mut memo,
             },
         );
+        for (_, m) in fine_maps {
+            m.recycle();
+        }
         hidden.append(&mut maybe);
         hidden.sort_unstable();
         *undecided = hidden;
@@ -620,6 +625,10 @@ impl ErosionMethod {
             } else {
                 visible.push(id);
             }
+        }
+        // The coarse maps no test of this pass asked for.
+        for (_, m) in seeds.into_iter().flatten() {
+            m.recycle();
         }
         maps.into_iter().map(|(el, (m, _))| (el, m)).collect()
     }

@@ -283,6 +283,17 @@ pub struct PolarMap {
     /// The map of the same occluders from the same eye with fewer bins, whose blockers
     /// seed this one's ([`Self::seeded`]).
     coarse: Option<Box<PolarMap>>,
+    /// The bins written since the map was made (`dirty` per bin): [`Self::recycle`]
+    /// resets only those.
+    touched: Vec<u32>,
+    dirty: Vec<bool>,
+}
+
+/// Maps kept per thread by [`PolarMap::recycle`] for the next [`PolarMap::new`].
+const POOL_MAPS: usize = 32;
+
+thread_local! {
+    static POOL: std::cell::RefCell<Vec<PolarMap>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// The state of one bin's lazy march.
@@ -300,8 +311,20 @@ struct BinMarch {
 }
 
 impl PolarMap {
+    /// An empty map: one the thread recycled with as many bins if there is one (a cell's
+    /// tests make up to 18 maps of 4,096 bins, mostly for a few targets each; resetting
+    /// the bins they wrote is cheaper than allocating and filling whole arrays), else a
+    /// new one. Either is the same empty map.
     pub fn new(bins: Bins) -> Self {
         let n = bins.n;
+        let pooled = POOL.with_borrow_mut(|pool| {
+            let k = pool.iter().position(|m| m.bins.n == n)?;
+            Some(pool.swap_remove(k))
+        });
+        if let Some(mut m) = pooled {
+            m.bins = bins;
+            return m;
+        }
         PolarMap {
             bins,
             reach: vec![-1.0; n],
@@ -309,6 +332,41 @@ impl PolarMap {
             radii: Vec::new(),
             march: vec![BinMarch::default(); n],
             coarse: None,
+            touched: Vec::new(),
+            dirty: vec![false; n],
+        }
+    }
+
+    /// Give the map back to this thread's pool, emptied (and its coarse map with it).
+    pub fn recycle(mut self) {
+        if let Some(c) = self.coarse.take() {
+            c.recycle();
+        }
+        for &b in &self.touched {
+            let b = b as usize;
+            self.reach[b] = -1.0;
+            self.eye_lo[b] = f64::INFINITY;
+            let st = &mut self.march[b];
+            st.stairs.clear();
+            st.next = 0;
+            st.run = 0;
+            st.seeded = 0;
+            self.dirty[b] = false;
+        }
+        self.touched.clear();
+        self.radii.clear();
+        POOL.with_borrow_mut(|pool| {
+            if pool.len() < POOL_MAPS {
+                pool.push(self);
+            }
+        });
+    }
+
+    #[inline]
+    fn touch(&mut self, b: usize) {
+        if !self.dirty[b] {
+            self.dirty[b] = true;
+            self.touched.push(b as u32);
         }
     }
 
@@ -316,6 +374,7 @@ impl PolarMap {
     /// bound anything a lazy march needs).
     pub fn need(&mut self, t: &Target, eye: f64) {
         for &(b, rho) in &t.bins {
+            self.touch(b);
             self.reach[b] = self.reach[b].max(rho);
             self.eye_lo[b] = self.eye_lo[b].min(eye);
         }
@@ -340,6 +399,8 @@ impl PolarMap {
         let mut m = PolarMap::new(bins);
         if coarse.coarse.is_none() && coarse.bins.n > 0 && m.bins.n.is_multiple_of(coarse.bins.n) {
             m.coarse = Some(Box::new(coarse));
+        } else {
+            coarse.recycle();
         }
         m
     }
@@ -393,8 +454,9 @@ impl PolarMap {
         target: Option<(f64, f64)>,
     ) -> bool {
         if self.radii.is_empty() {
-            self.radii = self.radii(grid.pixel_m());
+            self.lay_out_radii(grid.pixel_m());
         }
+        self.touch(bin);
         if let Some(coarse) = self.coarse.as_deref_mut() {
             let cb = bin / (self.bins.n / coarse.bins.n);
             coarse.bin_hidden_at(grid, eye, cb, rho, None);
@@ -470,17 +532,18 @@ impl PolarMap {
     /// The near radii of the march's sectors (sector `k` is `[radii[k], radii[k+1]]`),
     /// up to the farthest reach: half a pixel near the eye, so that a wall two pixels
     /// thick holds a whole sector; about square sectors farther out.
-    fn radii(&self, d: f64) -> Vec<f64> {
+    fn lay_out_radii(&mut self, d: f64) {
         let w = self.bins.width;
         let far = self.reach.iter().copied().fold(-1.0f64, f64::max);
-        let mut radii = vec![0.0f64];
+        let radii = &mut self.radii;
+        radii.clear();
+        radii.push(0.0);
         let mut r = 0.0f64;
         while r < far {
             r += (0.5 * d).max(r * w);
             radii.push(r);
         }
         radii.push(r + (0.5 * d).max(r * w));
-        radii
     }
 
     /// March every needed bin as far as its farthest target (the whole map).
@@ -787,6 +850,41 @@ mod tests {
             }
             assert!(hidden > 0);
         }
+    }
+
+    /// A recycled map comes back empty: the same answers as a new one.
+    #[test]
+    fn recycled_map_is_empty() {
+        let p = MinPyramid::new(random_grid(3, 0.5));
+        let bins = Bins::new(1024);
+        let targets = ring_of_targets(&bins);
+        let answers = |m: &mut PolarMap| -> Vec<bool> {
+            for t in &targets {
+                m.need(t, 2.0);
+            }
+            targets
+                .iter()
+                .map(|t| m.hidden(&p, DVec2::ZERO, t, 2.0, 6.0, 0))
+                .collect()
+        };
+        let fresh = answers(&mut PolarMap::new(bins.clone()));
+        // Dirty a map far more than the second use will, then recycle it.
+        let mut used = PolarMap::new(bins.clone());
+        for t in &targets {
+            used.need(t, 0.5);
+        }
+        for t in &targets {
+            used.hidden(&p, DVec2::new(3.0, -2.0), t, 0.5, 30.0, 0);
+        }
+        used.recycle();
+        let mut again = PolarMap::new(bins.clone());
+        assert!(again.touched.is_empty());
+        assert!(again.reach.iter().all(|&r| r == -1.0));
+        assert!(again
+            .march
+            .iter()
+            .all(|b| b.stairs.is_empty() && b.next == 0));
+        assert_eq!(answers(&mut again), fresh);
     }
 
     /// A map seeded with the blockers of a coarser map hides every target the unseeded
