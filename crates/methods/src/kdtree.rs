@@ -6,9 +6,6 @@
 
 use sightline_geom::Aabb3;
 
-/// Objects per leaf.
-const LEAF_SIZE: usize = 4;
-
 #[derive(Clone, Debug)]
 pub(crate) enum NodeKind {
     Leaf { first: u32, len: u32 },
@@ -29,11 +26,12 @@ pub(crate) struct KdTree {
 }
 
 impl KdTree {
-    pub(crate) fn build(mut items: Vec<(u32, Aabb3)>) -> Self {
+    /// The tree of `items`, at most `leaf_size` (≥ 1) per leaf.
+    pub(crate) fn build(mut items: Vec<(u32, Aabb3)>, leaf_size: usize) -> Self {
         let mut nodes = Vec::new();
         if !items.is_empty() {
             let n = items.len();
-            build_rec(&mut items, 0, n, &mut nodes);
+            build_rec(&mut items, 0, n, leaf_size.max(1), &mut nodes);
         }
         KdTree { nodes, items }
     }
@@ -43,7 +41,13 @@ impl KdTree {
     }
 }
 
-fn build_rec(items: &mut [(u32, Aabb3)], first: usize, len: usize, nodes: &mut Vec<Node>) -> u32 {
+fn build_rec(
+    items: &mut [(u32, Aabb3)],
+    first: usize,
+    len: usize,
+    leaf: usize,
+    nodes: &mut Vec<Node>,
+) -> u32 {
     let slice = &mut items[first..first + len];
     let bbox = slice.iter().fold(Aabb3::EMPTY, |b, (_, x)| b.union(*x));
     let id = nodes.len() as u32;
@@ -54,7 +58,7 @@ fn build_rec(items: &mut [(u32, Aabb3)], first: usize, len: usize, nodes: &mut V
             len: len as u32,
         },
     });
-    if len <= LEAF_SIZE {
+    if len <= leaf {
         return id;
     }
     // Split at the median centre along the longer horizontal extent of the centres.
@@ -69,8 +73,8 @@ fn build_rec(items: &mut [(u32, Aabb3)], first: usize, len: usize, nodes: &mut V
     slice.select_nth_unstable_by(mid, |a, b| {
         a.1.center()[axis].total_cmp(&b.1.center()[axis])
     });
-    let left = build_rec(items, first, mid, nodes);
-    let right = build_rec(items, first + mid, len - mid, nodes);
+    let left = build_rec(items, first, mid, leaf, nodes);
+    let right = build_rec(items, first + mid, len - mid, leaf, nodes);
     nodes[id as usize].kind = NodeKind::Inner { left, right };
     id
 }

@@ -30,7 +30,7 @@ impl Hierarchy {
     /// The hierarchy over `ids`, each with its box `bounds(id)`.
     pub(crate) fn build(ids: &[u32], bounds: impl Fn(u32) -> Aabb3) -> Self {
         Hierarchy {
-            tree: KdTree::build(ids.iter().map(|&i| (i, bounds(i))).collect()),
+            tree: KdTree::build(ids.iter().map(|&i| (i, bounds(i))).collect(), 4),
         }
     }
 
