@@ -12,6 +12,9 @@
 use crate::kdtree::{KdTree, NodeKind};
 use sightline_geom::Aabb3;
 
+/// Occludees per leaf of the hierarchy.
+const LEAF_SIZE: usize = 4;
+
 /// What a test concludes about a node's box.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Verdict {
@@ -30,7 +33,7 @@ impl Hierarchy {
     /// The hierarchy over `ids`, each with its box `bounds(id)`.
     pub(crate) fn build(ids: &[u32], bounds: impl Fn(u32) -> Aabb3) -> Self {
         Hierarchy {
-            tree: KdTree::build(ids.iter().map(|&i| (i, bounds(i))).collect(), 4),
+            tree: KdTree::build(ids.iter().map(|&i| (i, bounds(i))).collect(), LEAF_SIZE),
         }
     }
 
