@@ -348,11 +348,14 @@ impl PolarMap {
             let b = b as usize;
             self.reach[b] = -1.0;
             self.eye_lo[b] = f64::INFINITY;
+            // A default bin march that keeps its staircase's allocation.
             let st = &mut self.march[b];
-            st.stairs.clear();
-            st.next = 0;
-            st.run = 0;
-            st.seeded = 0;
+            let mut stairs = std::mem::take(&mut st.stairs);
+            stairs.clear();
+            *st = BinMarch {
+                stairs,
+                ..BinMarch::default()
+            };
             self.dirty[b] = false;
         }
         self.touched.clear();
