@@ -197,9 +197,11 @@ impl Occluders for Eroded {
 type SampleMemo = HashMap<(usize, usize), Option<Vec<DVec2>>>;
 
 /// What one pass of [`ErosionMethod::decide`] shares with the others: the maps of the
-/// coarser pass (seeds of the new maps) and the X-samplings.
+/// coarser pass (seeds of the new maps), whether its own maps seed a finer pass (else
+/// they are recycled, [`PolarMap::recycle`]) and the X-samplings.
 struct Pass<'a> {
     seeds: Option<HashMap<Element, PolarMap>>,
+    seeds_next: bool,
     memo: &'a mut SampleMemo,
 }
 
@@ -515,8 +517,9 @@ impl ErosionMethod {
     /// Move the objects of `undecided` that `cell` (footprint `rect`) may see to
     /// `visible`: the two-pass from-centre test of §5.
     ///
-    /// A first pass at an eighth of the azimuth bins hides most of what will be hidden
-    /// for a fraction of the cost; only what it leaves is tested at full resolution
+    /// A first pass at 1/[`COARSE_FACTOR`] of the azimuth bins hides part of what will be
+    /// hidden for a fraction of the cost (on Lyon's 25 m cells a quarter; its blockers
+    /// also seed the full pass); only what it leaves is tested at full resolution
     /// (the test is conservative at any resolution, so either pass may hide).
     fn decide(
         &self,
@@ -529,21 +532,21 @@ impl ErosionMethod {
         if self.fine.n / COARSE_FACTOR < 64 {
             let pass = Pass {
                 seeds: None,
+                seeds_next: false,
                 memo: &mut memo,
             };
-            for (_, m) in self.decide_at(&self.fine, cell, rect, undecided, visible, pass) {
-                m.recycle();
-            }
+            self.decide_at(&self.fine, cell, rect, undecided, visible, pass);
             return;
         }
         let mut maybe = Vec::new();
         let pass = Pass {
             seeds: None,
+            seeds_next: true,
             memo: &mut memo,
         };
         let coarse_maps = self.decide_at(&self.coarse, cell, rect, undecided, &mut maybe, pass);
         let mut hidden = std::mem::take(undecided);
-        let fine_maps = self.decide_at(
+        self.decide_at(
             &self.fine,
             cell,
             rect,
@@ -551,12 +554,10 @@ impl ErosionMethod {
             visible,
             Pass {
                 seeds: Some(coarse_maps),
+                seeds_next: false,
                 memo: &mut memo,
             },
         );
-        for (_, m) in fine_maps {
-            m.recycle();
-        }
         hidden.append(&mut maybe);
         hidden.sort_unstable();
         *undecided = hidden;
@@ -564,7 +565,8 @@ impl ErosionMethod {
 
     /// [`Self::decide`] with `bins` azimuth bins; the maps of a pass with fewer bins
     /// from the same eye, if given, seed the new maps with their blockers
-    /// ([`PolarMap::seeded`]). Returns the maps built.
+    /// ([`PolarMap::seeded`]). Returns the maps built if they seed a finer pass
+    /// (`pass.seeds_next`; else none: they are recycled).
     fn decide_at(
         &self,
         bins: &Bins,
@@ -574,7 +576,11 @@ impl ErosionMethod {
         visible: &mut Vec<u32>,
         pass: Pass<'_>,
     ) -> HashMap<Element, PolarMap> {
-        let Pass { mut seeds, memo } = pass;
+        let Pass {
+            mut seeds,
+            seeds_next,
+            memo,
+        } = pass;
         let ctx = CellCtx {
             rect,
             half: rect.size() * 0.5,
@@ -626,11 +632,20 @@ impl ErosionMethod {
                 visible.push(id);
             }
         }
-        // The coarse maps no test of this pass asked for.
+        // The coarse maps no test of this pass asked for, and this pass's own unless
+        // they seed the next.
         for (_, m) in seeds.into_iter().flatten() {
             m.recycle();
         }
-        maps.into_iter().map(|(el, (m, _))| (el, m)).collect()
+        let mut out = HashMap::new();
+        for (el, (m, _)) in maps {
+            if seeds_next {
+                out.insert(el, m);
+            } else {
+                m.recycle();
+            }
+        }
+        out
     }
 }
 
