@@ -111,6 +111,16 @@ struct Rows {
 }
 
 impl Rows {
+    /// Only the `full` row of [`Rows::add`].
+    #[inline]
+    fn add_full(&mut self, lo: f64, hi: f64) {
+        if hi > lo {
+            let j0 = ceil_in_row((lo + self.m - self.u_lo) * self.scale);
+            let j1 = floor_in_row((hi - self.m - self.u_lo) * self.scale) - 1.0;
+            self.full |= column_mask(j0, j1);
+        }
+    }
+
     #[inline]
     fn add(&mut self, lo: f64, hi: f64) {
         if hi > lo {
@@ -298,6 +308,11 @@ const ALL: u32 = u32::MAX;
 /// `touch`, whose clear bits are then still gaps). Deep rows thus test a few pieces
 /// instead of all.
 ///
+/// Above the finest level a band not `full` is split without looking for the gaps of
+/// its `touch` row or sweeping it: its sub-bands see the same intervals grown, so the
+/// finest level decides every ray alike, and a coarse row only costs half the bits
+/// (1M metropolis, 4 cells: −2 to −4 % of the time).
+///
 /// A shaft gathered in steps ([`Planar::extend`]) is tested after each: the bands found
 /// covered are kept (`Scratch::covered`) and skipped by the next test of the same shaft,
 /// whose pieces are a superset (150k metropolis: −6 % of this function's instructions).
@@ -373,9 +388,14 @@ pub(crate) fn hidden(scratch: &mut Scratch, resolution: u32) -> bool {
             row.add(lo, hi);
         }
         let mut covered = false;
+        let finest = b.n >= resolution;
         for k in s..s + l {
             let (lo, hi) = p.piece_band_fast(piece(lists, k) as usize, b.w0, b.w1);
-            row.add(lo, hi);
+            if finest {
+                row.add(lo, hi);
+            } else {
+                row.add_full(lo, hi);
+            }
             if k % 8 == 7 && row.full == u128::MAX {
                 covered = true;
                 break;
@@ -385,7 +405,7 @@ pub(crate) fn hidden(scratch: &mut Scratch, resolution: u32) -> bool {
             push_band(found, b.w0, b.w1);
             continue;
         }
-        if row.touch == u128::MAX {
+        if finest && row.touch == u128::MAX {
             // Undecided by the rows: the exact sweep, over the band's pieces and the
             // parent's covered columns (a subset of the blocked rays).
             for k in s..s + l {

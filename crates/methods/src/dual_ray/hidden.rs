@@ -46,6 +46,8 @@ const NONE: u32 = u32::MAX;
 pub(crate) struct Cover {
     origin: DVec2,
     cell_m: f64,
+    /// `1 / cell_m`.
+    inv_m: f64,
     nx: usize,
     ny: usize,
     top: Vec<f64>,
@@ -59,6 +61,7 @@ impl Cover {
         Cover {
             origin: g.origin,
             cell_m: g.cell_m * COVER_FACTOR as f64,
+            inv_m: 1.0 / (g.cell_m * COVER_FACTOR as f64),
             nx,
             ny,
             top: vec![f64::NEG_INFINITY; nx * ny],
@@ -95,12 +98,12 @@ impl Cover {
 
     #[inline]
     fn col(&self, x: f64) -> usize {
-        bucket_of(x, self.origin.x, self.cell_m, self.nx)
+        bucket_of(x, self.origin.x, self.inv_m, self.nx)
     }
 
     #[inline]
     fn row(&self, y: f64) -> usize {
-        bucket_of(y, self.origin.y, self.cell_m, self.ny)
+        bucket_of(y, self.origin.y, self.inv_m, self.ny)
     }
 
     /// Visit the boxes covering the cells over `[x0, x1]` whose rows meet `rows(cx0,
