@@ -116,17 +116,18 @@ impl Rows {
     fn add_full(&mut self, lo: f64, hi: f64) {
         if hi > lo {
             let j0 = ceil_in_row((lo + self.m - self.u_lo) * self.scale);
-            let j1 = floor_in_row((hi - self.m - self.u_lo) * self.scale) - 1.0;
+            let j1 = floor_in_row((hi - self.m - self.u_lo) * self.scale) - 1;
             self.full |= column_mask(j0, j1);
         }
     }
 
+    /// Add the interval `[lo, hi]` (nothing when `hi > lo` fails, NaN included).
     #[inline]
     fn add(&mut self, lo: f64, hi: f64) {
         if hi > lo {
             // Columns j with [u_j, u_j+1] ⊂ [lo + m, hi - m].
             let j0 = ceil_in_row((lo + self.m - self.u_lo) * self.scale);
-            let j1 = floor_in_row((hi - self.m - self.u_lo) * self.scale) - 1.0;
+            let j1 = floor_in_row((hi - self.m - self.u_lo) * self.scale) - 1;
             self.full |= column_mask(j0, j1);
             // Columns j meeting [lo - m, hi + m].
             let k0 = floor_in_row((lo - self.m - self.u_lo) * self.scale);
@@ -136,17 +137,28 @@ impl Rows {
     }
 }
 
-/// `floor(x)` for the column indices of [`band_covered`], clamped to `[-2, COLUMNS + 2]`
-/// first (inlined: `f64::floor` is a libm call without SSE4.1). NaN stays NaN.
-#[inline]
-fn floor_in_row(x: f64) -> f64 {
-    if x.is_nan() {
-        return x;
+/// `PREFIX[k]`: the bits `0..k` of a row.
+const PREFIX: [u128; COLUMNS as usize + 1] = {
+    let mut t = [u128::MAX; COLUMNS as usize + 1];
+    let mut k = 0;
+    while k < COLUMNS as usize {
+        t[k] = (1u128 << k) - 1;
+        k += 1;
     }
+    t
+};
+
+/// `floor(x)` for the column indices of the rows, clamped to `[-2, COLUMNS + 2]` first
+/// (inlined: `f64::floor` is a libm call without SSE4.1). `x` must not be NaN: every
+/// caller passes the ends of an interval that passed `hi > lo` (or `hi >= lo`), over a
+/// finite scale.
+#[inline]
+fn floor_in_row(x: f64) -> i32 {
+    debug_assert!(!x.is_nan());
     let x = x.clamp(-2.0, (COLUMNS + 2) as f64);
-    let t = x as i32 as f64;
-    if t > x {
-        t - 1.0
+    let t = x as i32;
+    if t as f64 > x {
+        t - 1
     } else {
         t
     }
@@ -154,17 +166,25 @@ fn floor_in_row(x: f64) -> f64 {
 
 /// `ceil(x)`, clamped like [`floor_in_row`].
 #[inline]
-fn ceil_in_row(x: f64) -> f64 {
-    if x.is_nan() {
-        return x;
-    }
+fn ceil_in_row(x: f64) -> i32 {
+    debug_assert!(!x.is_nan());
     let x = x.clamp(-2.0, (COLUMNS + 2) as f64);
-    let t = x as i32 as f64;
-    if t < x {
-        t + 1.0
+    let t = x as i32;
+    if (t as f64) < x {
+        t + 1
     } else {
         t
     }
+}
+
+/// The bits `j0..=j1` of a row (clamped to the row; `0` when empty), by table.
+#[inline]
+pub(crate) fn column_mask(j0: i32, j1: i32) -> u128 {
+    let (a, b) = (j0.max(0), j1.min(COLUMNS as i32 - 1));
+    if a > b {
+        return 0;
+    }
+    PREFIX[(b + 1) as usize] & !PREFIX[a as usize]
 }
 
 /// Columns of the bit-parallel rows of [`band_covered`].
@@ -190,26 +210,6 @@ pub(crate) fn touch_row(iv: &[(f64, f64)], u_lo: f64, span: f64, m: f64) -> u128
         touch |= column_mask(k0, k1);
     }
     touch
-}
-
-/// The bits `j0..=j1` of a row (clamped to the row; `0` when empty or NaN).
-#[inline]
-pub(crate) fn column_mask(j0: f64, j1: f64) -> u128 {
-    if j0.is_nan() || j1.is_nan() {
-        return 0;
-    }
-    let top = (COLUMNS - 1) as f64;
-    let (a, b) = (j0.max(0.0), j1.min(top));
-    if !(a <= b) {
-        return 0;
-    }
-    let (a, b) = (a as u32, b as u32);
-    let upto = if b >= COLUMNS - 1 {
-        u128::MAX
-    } else {
-        (1u128 << (b + 1)) - 1
-    };
-    upto & !((1u128 << a) - 1)
 }
 
 /// Whether the closed intervals cover `[a, b]`, each joint overlapping by `eps`.
@@ -510,6 +510,23 @@ mod tests {
     use sightline_scene::generate::{city, metropolis};
     use std::sync::Arc;
 
+    proptest::proptest! {
+        /// The column bounds are `floor` and `ceil` (clamped), the masks the bits between.
+        #[test]
+        fn column_bounds_and_masks(x in -300.0f64..300.0, k in -4i32..134, j in -4i32..134) {
+            for x in [x, k as f64, k as f64 + 1e-12, k as f64 - 1e-12] {
+                let c = |v: f64| v.clamp(-2.0, 130.0) as i32;
+                proptest::prop_assert_eq!(floor_in_row(x), c(x.floor()));
+                proptest::prop_assert_eq!(ceil_in_row(x), c(x.ceil()));
+            }
+            let m = column_mask(k, j);
+            for bit in 0..128 {
+                let inside = k <= bit && bit <= j;
+                proptest::prop_assert_eq!(m >> bit & 1 == 1, inside);
+            }
+        }
+    }
+
     /// The refinement with piece lists and seeded rows answers exactly as the plain one
     /// (every band over every piece) on the shafts of a random city and a grid city.
     #[test]
@@ -633,28 +650,23 @@ mod tests {
     #[test]
     fn floors() {
         for x in [-1.5, -1.0, -0.5, 0.0, 0.25, 1.0, 3.7, 127.9, 128.0] {
-            assert_eq!(floor_in_row(x), x.floor(), "{x}");
+            assert_eq!(floor_in_row(x), x.floor() as i32, "{x}");
+            assert_eq!(ceil_in_row(x), x.ceil() as i32, "{x}");
         }
-        for x in [-1.5, -1.0, -0.5, 0.0, 0.25, 1.0, 3.7, 127.9, 128.0] {
-            assert_eq!(ceil_in_row(x), x.ceil(), "{x}");
-        }
-        assert_eq!(ceil_in_row(1e300), 130.0);
-        assert_eq!(ceil_in_row(-1e300), -2.0);
-        assert!(ceil_in_row(f64::NAN).is_nan());
-        assert_eq!(floor_in_row(-1e300), -2.0);
-        assert_eq!(floor_in_row(f64::INFINITY), 130.0);
-        assert!(floor_in_row(f64::NAN).is_nan());
+        assert_eq!(ceil_in_row(1e300), 130);
+        assert_eq!(ceil_in_row(-1e300), -2);
+        assert_eq!(floor_in_row(-1e300), -2);
+        assert_eq!(floor_in_row(f64::INFINITY), 130);
     }
 
     #[test]
     fn column_masks() {
-        assert_eq!(column_mask(0.0, 0.0), 1);
-        assert_eq!(column_mask(2.0, 3.0), 0b1100);
-        assert_eq!(column_mask(-5.0, 500.0), u128::MAX);
-        assert_eq!(column_mask(3.0, 2.0), 0);
-        assert_eq!(column_mask(f64::NAN, 2.0), 0);
-        assert_eq!(column_mask(127.0, f64::INFINITY), 1u128 << 127);
-        assert_eq!(column_mask(f64::NEG_INFINITY, -1.0), 0);
+        assert_eq!(column_mask(0, 0), 1);
+        assert_eq!(column_mask(2, 3), 0b1100);
+        assert_eq!(column_mask(-5, 500), u128::MAX);
+        assert_eq!(column_mask(3, 2), 0);
+        assert_eq!(column_mask(127, 130), 1u128 << 127);
+        assert_eq!(column_mask(-2, -1), 0);
     }
 
     #[test]

@@ -55,6 +55,10 @@ pub(crate) struct Ceiling {
     pub x_anchor: f64,
     pub z0: f64,
     pub slope: f64,
+    /// `1 / slope` (0 for a level plane): [`Ceiling::below`] runs for every trapezoid
+    /// gathered, and a product rounds within a few ulps of the quotient, far under
+    /// [`CUT_MARGIN_M`] anywhere in a scene.
+    inv_slope: f64,
 }
 
 impl Ceiling {
@@ -69,6 +73,7 @@ impl Ceiling {
                 x_anchor: lo.x0,
                 z0: lo_top,
                 slope,
+                inv_slope: 1.0 / slope,
             }
         } else if lo_top > hi_top {
             // Falling towards `hi`: through lo's near edge (x1) and hi's far edge (x1).
@@ -77,12 +82,14 @@ impl Ceiling {
                 x_anchor: lo.x1,
                 z0: lo_top,
                 slope,
+                inv_slope: 1.0 / slope,
             }
         } else {
             Ceiling {
                 x_anchor: lo.x1,
                 z0: lo_top,
                 slope: 0.0,
+                inv_slope: 0.0,
             }
         }
     }
@@ -103,7 +110,7 @@ impl Ceiling {
                 return None;
             }
         } else {
-            let xs = self.x_anchor + (h - self.z0) / self.slope;
+            let xs = self.x_anchor + (h - self.z0) * self.inv_slope;
             if self.slope > 0.0 {
                 (x0, x1.min(xs - CUT_MARGIN_M))
             } else {
@@ -422,8 +429,9 @@ impl Planar {
         let rays = [u_lo, u_hi, w_lo, w_hi];
         Planar::gather(scratch, decomp, (ga, gb), rays, hidden.cover());
         let p = &mut scratch.planar;
-        let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
-        let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
+        let inv = 1.0 / (xb - xa);
+        let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) * inv).clamp(0.0, 1.0);
+        let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) * inv).clamp(0.0, 1.0);
         // Nearest the cell first: the coverage rows of `discrete` fill up early.
         if !cell_low {
             p.pieces.reverse();
@@ -571,8 +579,9 @@ impl Planar {
         let gen = scratch.slab_stamps.next(decomp.slabs.len());
         let p = &mut scratch.planar;
         let (xa, xb, yc, ceiling) = (p.xa, p.xb, p.yc, p.ceiling);
-        let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
-        let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
+        let inv = 1.0 / (xb - xa);
+        let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) * inv).clamp(0.0, 1.0);
+        let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) * inv).clamp(0.0, 1.0);
         walk_slabs(
             decomp,
             (&mut scratch.slab_stamps.marks, gen),
@@ -635,8 +644,9 @@ impl Planar {
         let p = &scratch.planar;
         let (xa, xb, yc, len) = (p.xa, p.xb, p.yc, p.len);
         let (u_lo, u_hi, w_lo, w_hi) = (p.u_lo, p.u_hi, p.w_lo, p.w_hi);
-        let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
-        let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) / (xb - xa)).clamp(0.0, 1.0);
+        let inv = 1.0 / (xb - xa);
+        let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) * inv).clamp(0.0, 1.0);
+        let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) * inv).clamp(0.0, 1.0);
         let ray_y = |x: f64| yc + u + (w - u) * ((x - xa) / len);
         let (a, b) = (DVec2::new(0.0, u), DVec2::new(len, w));
         // Rounding of the ray's height must not skip a bucket row.
@@ -856,16 +866,20 @@ fn cut_slab(
             None => kept.push((f64::INFINITY, f64::NEG_INFINITY)),
         }
     }
-    cuts.sort_by(f64::total_cmp);
-    cuts.dedup();
-    let span = slab.x1 - slab.x0;
+    if cuts.len() > 2 {
+        cuts.sort_by(f64::total_cmp);
+        cuts.dedup();
+    }
+    // Both pieces on either side of a cut interpolate the same line at the same `x`:
+    // bit-identical ends, whatever the rounding.
+    let inv_span = 1.0 / (slab.x1 - slab.x0);
     let at = |line: &[f64; 2], x: f64| -> f64 {
         if x <= slab.x0 {
             line[0]
         } else if x >= slab.x1 {
             line[1]
         } else {
-            line[0] + (line[1] - line[0]) * ((x - slab.x0) / span)
+            line[0] + (line[1] - line[0]) * ((x - slab.x0) * inv_span)
         }
     };
     for w in cuts.windows(2) {
