@@ -600,7 +600,8 @@ fn dm_at_most(h: f64) -> Option<u16> {
     if !(h >= 0.0) {
         return None;
     }
-    let mut v = (h / DM).floor().min(u16::MAX as f64) as u16;
+    // A first guess (the saturating cast truncates: a floor for h ≥ 0), made exact below.
+    let mut v = (h * (1.0 / DM)) as u16;
     while v < u16::MAX && f64::from(v + 1) * DM <= h {
         v += 1;
     }
