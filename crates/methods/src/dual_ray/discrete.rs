@@ -115,6 +115,7 @@ impl Rows {
     #[inline]
     fn add_full(&mut self, lo: f64, hi: f64) {
         if hi > lo {
+            // Columns j with [u_j, u_j+1] ⊂ [lo + m, hi - m].
             let j0 = ceil_in_row((lo + self.m - self.u_lo) * self.scale);
             let j1 = floor_in_row((hi - self.m - self.u_lo) * self.scale) - 1;
             self.full |= column_mask(j0, j1);
@@ -125,10 +126,7 @@ impl Rows {
     #[inline]
     fn add(&mut self, lo: f64, hi: f64) {
         if hi > lo {
-            // Columns j with [u_j, u_j+1] ⊂ [lo + m, hi - m].
-            let j0 = ceil_in_row((lo + self.m - self.u_lo) * self.scale);
-            let j1 = floor_in_row((hi - self.m - self.u_lo) * self.scale) - 1;
-            self.full |= column_mask(j0, j1);
+            self.add_full(lo, hi);
             // Columns j meeting [lo - m, hi + m].
             let k0 = floor_in_row((lo - self.m - self.u_lo) * self.scale);
             let k1 = floor_in_row((hi + self.m - self.u_lo) * self.scale);
@@ -310,8 +308,8 @@ const ALL: u32 = u32::MAX;
 ///
 /// Above the finest level a band not `full` is split without looking for the gaps of
 /// its `touch` row or sweeping it: its sub-bands see the same intervals grown, so the
-/// finest level decides every ray alike, and a coarse row only costs half the bits
-/// (1M metropolis, 4 cells: −2 to −4 % of the time).
+/// finest level decides every ray alike, and a coarse band computes half the column
+/// bounds (1M metropolis, 4 cells: −2 to −4 % of the time).
 ///
 /// A shaft gathered in steps ([`Planar::extend`]) is tested after each: the bands found
 /// covered are kept (`Scratch::covered`) and skipped by the next test of the same shaft,

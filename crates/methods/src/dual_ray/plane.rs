@@ -345,6 +345,15 @@ impl Oriented {
     }
 }
 
+/// The line of the rays from `u` on `F_A` (at `xa`) to `w` on `F_B` (at `xb`): its `y` at
+/// `x`, in scene-local coordinates (`yc` the shaft's centre line), held at its ends
+/// beyond `[xa, xb]`. With `u`, `w` the bounds of a hull of `RS`, the lower or upper
+/// edge of the region its rays sweep.
+fn shaft_line((xa, xb): (f64, f64), yc: f64, u: f64, w: f64) -> impl Fn(f64) -> f64 {
+    let inv = 1.0 / (xb - xa);
+    move |x| yc + u + (w - u) * ((x - xa) * inv).clamp(0.0, 1.0)
+}
+
 /// `a` and `b` ordered along `axis`, or `None` when they are not separated along it.
 pub(crate) fn orient(a: &Aabb3, b: &Aabb3, axis: Axis) -> Option<Oriented> {
     let (ra, rb) = (local_rect(a, axis), local_rect(b, axis));
@@ -429,9 +438,8 @@ impl Planar {
         let rays = [u_lo, u_hi, w_lo, w_hi];
         Planar::gather(scratch, decomp, (ga, gb), rays, hidden.cover());
         let p = &mut scratch.planar;
-        let inv = 1.0 / (xb - xa);
-        let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) * inv).clamp(0.0, 1.0);
-        let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) * inv).clamp(0.0, 1.0);
+        let lower = shaft_line((xa, xb), yc, u_lo, w_lo);
+        let upper = shaft_line((xa, xb), yc, u_hi, w_hi);
         // Nearest the cell first: the coverage rows of `discrete` fill up early.
         if !cell_low {
             p.pieces.reverse();
@@ -579,9 +587,8 @@ impl Planar {
         let gen = scratch.slab_stamps.next(decomp.slabs.len());
         let p = &mut scratch.planar;
         let (xa, xb, yc, ceiling) = (p.xa, p.xb, p.yc, p.ceiling);
-        let inv = 1.0 / (xb - xa);
-        let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) * inv).clamp(0.0, 1.0);
-        let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) * inv).clamp(0.0, 1.0);
+        let lower = shaft_line((xa, xb), yc, u_lo, w_lo);
+        let upper = shaft_line((xa, xb), yc, u_hi, w_hi);
         walk_slabs(
             decomp,
             (&mut scratch.slab_stamps.marks, gen),
@@ -644,9 +651,8 @@ impl Planar {
         let p = &scratch.planar;
         let (xa, xb, yc, len) = (p.xa, p.xb, p.yc, p.len);
         let (u_lo, u_hi, w_lo, w_hi) = (p.u_lo, p.u_hi, p.w_lo, p.w_hi);
-        let inv = 1.0 / (xb - xa);
-        let lower = |x: f64| yc + u_lo + (w_lo - u_lo) * ((x - xa) * inv).clamp(0.0, 1.0);
-        let upper = |x: f64| yc + u_hi + (w_hi - u_hi) * ((x - xa) * inv).clamp(0.0, 1.0);
+        let lower = shaft_line((xa, xb), yc, u_lo, w_lo);
+        let upper = shaft_line((xa, xb), yc, u_hi, w_hi);
         let ray_y = |x: f64| yc + u + (w - u) * ((x - xa) / len);
         let (a, b) = (DVec2::new(0.0, u), DVec2::new(len, w));
         // Rounding of the ray's height must not skip a bucket row.
