@@ -315,6 +315,7 @@ const ALL: u32 = u32::MAX;
 /// covered are kept (`Scratch::covered`) and skipped by the next test of the same shaft,
 /// whose pieces are a superset (150k metropolis: −6 % of this function's instructions).
 pub(crate) fn hidden(scratch: &mut Scratch, resolution: u32) -> bool {
+    scratch.gap_ray = None;
     let p = &scratch.planar;
     let (w_lo, w_hi) = (p.w_lo, p.w_hi);
     if w_hi.is_nan() || w_lo.is_nan() || w_hi < w_lo {
@@ -433,6 +434,14 @@ pub(crate) fn hidden(scratch: &mut Scratch, resolution: u32) -> bool {
             }
         }
         if b.n >= resolution {
+            // A candidate witness: the middle of the widest run of columns no interval
+            // meets, at the band's middle row.
+            scratch.gap_ray = widest_run(!row.touch).map(|(j, run)| {
+                (
+                    p.u_lo + (j as f64 + 0.5 * run as f64) / scale,
+                    0.5 * (b.w0 + b.w1),
+                )
+            });
             // The bands after this one that the earlier calls found covered stay so.
             found.extend_from_slice(&prev[k_prev..]);
             std::mem::swap(&mut scratch.covered, &mut scratch.covered_next);
@@ -465,6 +474,25 @@ pub(crate) fn hidden(scratch: &mut Scratch, resolution: u32) -> bool {
         }
     }
     true
+}
+
+/// The first column and the length of the longest run of set bits of `bits` (`None`
+/// for none).
+fn widest_run(mut bits: u128) -> Option<(u32, u32)> {
+    let mut best: Option<(u32, u32)> = None;
+    let mut j = 0u32;
+    while bits != 0 {
+        let skip = bits.trailing_zeros();
+        bits >>= skip;
+        j += skip;
+        let run = (!bits).trailing_zeros();
+        if best.is_none_or(|(_, r)| run > r) {
+            best = Some((j, run));
+        }
+        bits = if run >= 128 { 0 } else { bits >> run };
+        j += run;
+    }
+    best
 }
 
 /// Append the covered band `[w0, w1]` to `found`, joined to the last one it touches.

@@ -50,7 +50,9 @@
 //! witness ray from their gaps, checked along its own line through the rest of the
 //! shaft, settles "visible" for this axis; rays aimed at the node or object may settle
 //! "visible"; only then is the rest of the shaft gathered (the pieces gathered so far
-//! are kept): the part at the other end, then the middle, each tested. With the
+//! are kept): the part at the other end, then the middle, each tested; between the
+//! two, the ray in the widest gap the other end's test left is verified as a witness
+//! (`witness::gap_visible`). With the
 //! discrete test every step after the first gathers only the slabs meeting the rays the
 //! pieces so far leave free (`discrete::free_hull`): the others cannot change the
 //! answer, and on the 1M metropolis they are most of the pieces.
@@ -639,6 +641,12 @@ impl DualRay {
                         if discrete::hidden(scratch, resolution_px) {
                             stats.full_hidden += 1;
                             return true;
+                        }
+                        // Both ends gathered: the gap the test left is a good witness.
+                        if witness::gap_visible(scratch, decomp, hid) {
+                            stats.visible += 1;
+                            stats.witnessed += 1;
+                            continue;
                         }
                     }
                 }

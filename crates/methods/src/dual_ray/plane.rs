@@ -286,6 +286,9 @@ pub(crate) struct Scratch {
     pub hidden_stamps: Stamps,
     /// The pieces of the hidden boxes of the shaft being built.
     pub hidden_pieces: Vec<Piece>,
+    /// A ray `(u, w)` in a gap of the finest band the last `discrete::hidden` left
+    /// uncovered (a candidate witness, to be verified).
+    pub gap_ray: Option<(f64, f64)>,
 }
 
 /// The boxes proven hidden from the cell ([`HiddenSet`]), occluders of a test along

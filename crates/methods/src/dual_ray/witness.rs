@@ -50,6 +50,21 @@ pub(crate) fn visible(scratch: &mut Scratch, decomp: &Decomposition, hidden: Hid
     false
 }
 
+/// `true` when the ray the last `discrete::hidden` found in a gap of its finest uncovered
+/// band (`Scratch::gap_ray`) is verified clear, as [`visible`]'s candidates. After the
+/// pieces at both ends of a shaft are gathered, their gap is far likelier to run clear
+/// through the middle than one of the near pieces alone (1M metropolis, 4 cells: 653 →
+/// 933 witnesses, 1,071–1,079 → 1,040 ms of CPU; tried after the near pieces too: flat).
+pub(crate) fn gap_visible(
+    scratch: &mut Scratch,
+    decomp: &Decomposition,
+    hidden: Hidden<'_>,
+) -> bool {
+    scratch.gap_ray.is_some_and(|(u, w)| {
+        ray_is_clear(&scratch.planar, u, w) && Planar::far_ray_clear(scratch, decomp, hidden, u, w)
+    })
+}
+
 /// The middles of the runs of columns left clear by the gathered pieces and the box
 /// masks at `SAMPLES` rows (the bit-parallel rows of [`super::discrete`]), sorted by
 /// increasing width (the widest is popped first).
@@ -95,21 +110,29 @@ fn gather_candidates(scratch: &mut Scratch) {
 #[cfg(test)]
 mod tests {
     use super::super::occluders::Axis;
-    use super::super::plane::{orient, Planar, Scratch};
+    use super::super::plane::{orient, Oriented, Planar, Scratch};
     use super::super::{discrete, exact, DualRay, Planarity};
     use super::*;
     use sightline_geom::{Aabb3, DVec3};
     use sightline_scene::generate::{city, metropolis};
     use std::sync::Arc;
 
-    /// Whenever a witness is found from the near pieces, the full shaft is not hidden
-    /// for the discretized method at any resolution nor for the exact one: the witness
+    /// Whenever a witness is found from the near pieces, or in the gap the test of the
+    /// near and far-end pieces left ([`gap_visible`]), the full shaft is not hidden for
+    /// the discretized method at any resolution nor for the exact one: the witness
     /// changes no answer.
     fn witness_never_contradicts(scene: sightline_scene::Scene, cells: &[[f64; 6]]) {
         let m = DualRay::new("dual-ray", Arc::new(scene), Planarity::Exact);
         let o3 = m.origin.extend(0.0);
         let mut scratch = Scratch::default();
-        let (mut witnessed, mut tried) = (0, 0);
+        let (mut witnessed, mut tried, mut gaps) = (0, 0, 0);
+        let full_is_visible = |scratch: &mut Scratch, pair: &Oriented, c: &[f64; 6], axis| {
+            Planar::build(scratch, m.decomposition(axis), pair, None, Hidden::NONE);
+            for res in [16, 128] {
+                assert!(!discrete::hidden(scratch, res), "{c:?} {pair:?} {res}");
+            }
+            assert!(!exact::hidden(scratch), "{c:?} {pair:?} exact");
+        };
         for c in cells {
             let a = Aabb3::new(
                 DVec3::new(c[0], c[1], c[2]) - o3,
@@ -125,21 +148,24 @@ mod tests {
                     let near = if pair.cell_low { 0.3 * len } else { -0.3 * len };
                     Planar::build(&mut scratch, decomp, &pair, Some(near), Hidden::NONE);
                     tried += 1;
-                    if !visible(&mut scratch, decomp, Hidden::NONE) {
-                        continue;
+                    if visible(&mut scratch, decomp, Hidden::NONE) {
+                        witnessed += 1;
+                        full_is_visible(&mut scratch, &pair, c, axis);
                     }
-                    witnessed += 1;
-                    Planar::build(&mut scratch, decomp, &pair, None, Hidden::NONE);
-                    for res in [16, 128] {
-                        assert!(!discrete::hidden(&mut scratch, res), "{c:?} {b:?} {res}");
+                    Planar::build(&mut scratch, decomp, &pair, Some(near), Hidden::NONE);
+                    Planar::extend_other_end(&mut scratch, decomp, Hidden::NONE, 0.1 * len, None);
+                    if !discrete::hidden(&mut scratch, 128)
+                        && gap_visible(&mut scratch, decomp, Hidden::NONE)
+                    {
+                        gaps += 1;
+                        full_is_visible(&mut scratch, &pair, c, axis);
                     }
-                    assert!(!exact::hidden(&mut scratch), "{c:?} {b:?} exact");
                 }
             }
         }
         assert!(
-            witnessed > 10 && witnessed < tried,
-            "{witnessed} of {tried}"
+            witnessed > 10 && witnessed < tried && gaps > 10 && gaps < tried,
+            "{witnessed} and {gaps} of {tried}"
         );
     }
 
