@@ -413,20 +413,12 @@ pub(crate) fn hidden(scratch: &mut Scratch, resolution: u32) -> bool {
                     iv.push((lo, hi));
                 }
             }
-            let mut seed = b.seed;
-            let mut j = 0u32;
-            while seed != 0 {
-                let skip = seed.trailing_zeros();
-                seed >>= skip;
-                j += skip;
-                let run = (!seed).trailing_zeros();
+            for (j, run) in runs(b.seed) {
                 // A run of full columns lies `m = 3·eps` deep in the blocked rays.
                 iv.push((
                     p.u_lo + j as f64 / scale - 2.0 * p.eps,
                     p.u_lo + (j + run) as f64 / scale + 2.0 * p.eps,
                 ));
-                seed = if run >= 128 { 0 } else { seed >> run };
-                j += run;
             }
             if covers(iv, p.u_lo, p.u_hi, p.eps) {
                 push_band(found, b.w0, b.w1);
@@ -476,23 +468,26 @@ pub(crate) fn hidden(scratch: &mut Scratch, resolution: u32) -> bool {
     true
 }
 
-/// The first column and the length of the longest run of set bits of `bits` (`None`
-/// for none).
-fn widest_run(mut bits: u128) -> Option<(u32, u32)> {
-    let mut best: Option<(u32, u32)> = None;
+/// The runs of set bits of a row, ascending: `(first column, length)`.
+pub(crate) fn runs(mut bits: u128) -> impl Iterator<Item = (u32, u32)> {
     let mut j = 0u32;
-    while bits != 0 {
+    std::iter::from_fn(move || {
+        if bits == 0 {
+            return None;
+        }
         let skip = bits.trailing_zeros();
         bits >>= skip;
         j += skip;
-        let run = (!bits).trailing_zeros();
-        if best.is_none_or(|(_, r)| run > r) {
-            best = Some((j, run));
-        }
+        let (start, run) = (j, (!bits).trailing_zeros());
         bits = if run >= 128 { 0 } else { bits >> run };
         j += run;
-    }
-    best
+        Some((start, run))
+    })
+}
+
+/// The longest run of set bits of `bits` (the first of equal ones; `None` for none).
+fn widest_run(bits: u128) -> Option<(u32, u32)> {
+    runs(bits).reduce(|best, r| if r.1 > best.1 { r } else { best })
 }
 
 /// Append the covered band `[w0, w1]` to `found`, joined to the last one it touches.
@@ -683,6 +678,21 @@ mod tests {
         assert_eq!(ceil_in_row(-1e300), -2);
         assert_eq!(floor_in_row(-1e300), -2);
         assert_eq!(floor_in_row(f64::INFINITY), 130);
+    }
+
+    #[test]
+    fn runs_of_a_row() {
+        assert_eq!(runs(0).count(), 0);
+        assert_eq!(runs(u128::MAX).collect::<Vec<_>>(), vec![(0, 128)]);
+        let bits = 0b1110_0110u128 | (0b11u128 << 126);
+        assert_eq!(
+            runs(bits).collect::<Vec<_>>(),
+            vec![(1, 2), (5, 3), (126, 2)]
+        );
+        assert_eq!(widest_run(bits), Some((5, 3)));
+        assert_eq!(widest_run(0b1101), Some((2, 2)));
+        assert_eq!(widest_run(0b1011), Some((0, 2)));
+        assert_eq!(widest_run(0), None);
     }
 
     #[test]

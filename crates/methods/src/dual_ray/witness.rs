@@ -16,7 +16,7 @@
 //! pieces and then against the rest of the shaft along its own line only
 //! ([`Planar::far_ray_clear`]), stopping at the first piece that blocks it.
 
-use super::discrete::{touch_interval, touch_row, COLUMNS};
+use super::discrete::{runs, touch_interval, touch_row, COLUMNS};
 use super::exact::ray_is_clear;
 use super::occluders::Decomposition;
 use super::plane::{Hidden, Planar, Scratch};
@@ -91,17 +91,9 @@ fn gather_candidates(scratch: &mut Scratch) {
                 touch |= touch_interval(lo, hi, p.u_lo, span, m);
             }
         }
-        let mut free = !touch;
-        let mut j = 0u32;
-        while free != 0 {
-            let skip = free.trailing_zeros();
-            free >>= skip;
-            j += skip;
-            let run = (!free).trailing_zeros();
+        for (j, run) in runs(!touch) {
             let u = p.u_lo + col * (j as f64 + 0.5 * run as f64);
             cands.push((run as f64, u, w));
-            free = if run >= 128 { 0 } else { free >> run };
-            j += run;
         }
     }
     cands.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
