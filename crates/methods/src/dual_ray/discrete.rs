@@ -49,13 +49,7 @@ pub(crate) fn band_covered(p: &Planar, w0: f64, w1: f64, iv: &mut Vec<(f64, f64)
     let span = p.u_hi - p.u_lo;
     let m = 3.0 * p.eps;
     if span > 64.0 * m {
-        let mut row = Rows {
-            u_lo: p.u_lo,
-            scale: COLUMNS as f64 / span,
-            m,
-            full: 0,
-            touch: 0,
-        };
+        let mut row = Rows::new(p.u_lo, span, m, 0);
         for &(lo, hi) in iv.iter() {
             row.add(lo, hi);
         }
@@ -102,7 +96,7 @@ pub(crate) fn band_covered(p: &Planar, w0: f64, w1: f64, iv: &mut Vec<(f64, f64)
 }
 
 /// The two bit-parallel rows of [`band_covered`].
-struct Rows {
+pub(crate) struct Rows {
     u_lo: f64,
     scale: f64,
     m: f64,
@@ -111,6 +105,32 @@ struct Rows {
 }
 
 impl Rows {
+    /// Rows over `[u_lo, u_lo + span]` with margin `m`, both starting as `seed`.
+    pub(crate) fn new(u_lo: f64, span: f64, m: f64, seed: u128) -> Self {
+        Rows {
+            u_lo,
+            scale: COLUMNS as f64 / span,
+            m,
+            full: seed,
+            touch: seed,
+        }
+    }
+
+    /// The `touch` row: a clear bit is a column no interval added (grown by `m`) meets.
+    pub(crate) fn touch(&self) -> u128 {
+        self.touch
+    }
+
+    /// Only the `touch` row of [`Rows::add`], for any `lo <= hi` (the caller decides
+    /// which intervals count).
+    #[inline]
+    pub(crate) fn add_touch(&mut self, lo: f64, hi: f64) {
+        // Columns j meeting [lo - m, hi + m].
+        let k0 = floor_in_row((lo - self.m - self.u_lo) * self.scale);
+        let k1 = floor_in_row((hi + self.m - self.u_lo) * self.scale);
+        self.touch |= column_mask(k0, k1);
+    }
+
     /// Only the `full` row of [`Rows::add`].
     #[inline]
     fn add_full(&mut self, lo: f64, hi: f64) {
@@ -127,10 +147,7 @@ impl Rows {
     fn add(&mut self, lo: f64, hi: f64) {
         if hi > lo {
             self.add_full(lo, hi);
-            // Columns j meeting [lo - m, hi + m].
-            let k0 = floor_in_row((lo - self.m - self.u_lo) * self.scale);
-            let k1 = floor_in_row((hi + self.m - self.u_lo) * self.scale);
-            self.touch |= column_mask(k0, k1);
+            self.add_touch(lo, hi);
         }
     }
 }
@@ -188,28 +205,6 @@ pub(crate) fn column_mask(j0: i32, j1: i32) -> u128 {
 /// Columns of the bit-parallel rows of [`band_covered`].
 pub(crate) const COLUMNS: u32 = 128;
 
-/// The `touch` bits of one interval `[lo, hi]` (see [`touch_row`]).
-#[inline]
-pub(crate) fn touch_interval(lo: f64, hi: f64, u_lo: f64, span: f64, m: f64) -> u128 {
-    let scale = COLUMNS as f64 / span;
-    let k0 = floor_in_row((lo - m - u_lo) * scale);
-    let k1 = floor_in_row((hi + m - u_lo) * scale);
-    column_mask(k0, k1)
-}
-
-/// The `touch` row of [`band_covered`] for the intervals `iv` over `[u_lo, u_lo + span]`:
-/// a clear bit is a column no interval grown by `m` meets.
-pub(crate) fn touch_row(iv: &[(f64, f64)], u_lo: f64, span: f64, m: f64) -> u128 {
-    let scale = COLUMNS as f64 / span;
-    let mut touch = 0u128;
-    for &(lo, hi) in iv {
-        let k0 = floor_in_row((lo - m - u_lo) * scale);
-        let k1 = floor_in_row((hi + m - u_lo) * scale);
-        touch |= column_mask(k0, k1);
-    }
-    touch
-}
-
 /// Whether the closed intervals cover `[a, b]`, each joint overlapping by `eps`.
 pub(crate) fn covers(iv: &mut [(f64, f64)], a: f64, b: f64, eps: f64) -> bool {
     iv.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
@@ -252,13 +247,7 @@ pub(crate) fn free_hull(scratch: &Scratch, level: u32) -> Option<[f64; 4]> {
     let mut iv = Vec::new();
     let mut hull: Option<[f64; 4]> = None;
     for (w0, w1) in super::plane::bands_rev(w_lo, w_hi, level.max(1) as usize) {
-        let mut row = Rows {
-            u_lo: p.u_lo,
-            scale: COLUMNS as f64 / span,
-            m,
-            full: 0,
-            touch: 0,
-        };
+        let mut row = Rows::new(p.u_lo, span, m, 0);
         iv.clear();
         p.mask_band(w0, w1, &mut iv);
         for &(lo, hi) in &iv {
@@ -374,13 +363,7 @@ pub(crate) fn hidden(scratch: &mut Scratch, resolution: u32) -> bool {
             (b.first, b.len)
         };
         let piece = |lists: &[u32], k: u32| if b.len == ALL { k } else { lists[k as usize] };
-        let mut row = Rows {
-            u_lo: p.u_lo,
-            scale,
-            m,
-            full: b.seed,
-            touch: b.seed,
-        };
+        let mut row = Rows::new(p.u_lo, span, m, b.seed);
         iv.clear();
         p.mask_band(b.w0, b.w1, iv);
         for &(lo, hi) in iv.iter() {

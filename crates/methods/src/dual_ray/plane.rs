@@ -656,7 +656,7 @@ impl Planar {
         let (u_lo, u_hi, w_lo, w_hi) = (p.u_lo, p.u_hi, p.w_lo, p.w_hi);
         let lower = shaft_line((xa, xb), yc, u_lo, w_lo);
         let upper = shaft_line((xa, xb), yc, u_hi, w_hi);
-        let ray_y = |x: f64| yc + u + (w - u) * ((x - xa) / len);
+        let ray_y = shaft_line((xa, xb), yc, u, w);
         let (a, b) = (DVec2::new(0.0, u), DVec2::new(len, w));
         // Rounding of the ray's height must not skip a bucket row.
         let margin = 1e-6 * (1.0 + yc.abs() + u.abs() + w.abs());

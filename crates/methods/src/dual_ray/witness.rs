@@ -16,7 +16,7 @@
 //! pieces and then against the rest of the shaft along its own line only
 //! ([`Planar::far_ray_clear`]), stopping at the first piece that blocks it.
 
-use super::discrete::{runs, touch_interval, touch_row, COLUMNS};
+use super::discrete::{runs, Rows, COLUMNS};
 use super::exact::ray_is_clear;
 use super::occluders::Decomposition;
 use super::plane::{Hidden, Planar, Scratch};
@@ -95,14 +95,17 @@ fn gather_candidates(scratch: &mut Scratch) {
         let w = w_lo + (w_hi - w_lo) * ((k as f64 + 0.5) / SAMPLES as f64);
         iv.clear();
         p.mask_band(w, w, iv);
-        let mut touch = touch_row(iv, p.u_lo, span, m);
+        let mut row = Rows::new(p.u_lo, span, m, 0);
+        for &(lo, hi) in iv.iter() {
+            row.add_touch(lo, hi);
+        }
         for i in 0..p.duals.len() {
             let (lo, hi) = p.piece_band_fast(i, w, w);
             if hi >= lo {
-                touch |= touch_interval(lo, hi, p.u_lo, span, m);
+                row.add_touch(lo, hi);
             }
         }
-        for (j, run) in runs(!touch) {
+        for (j, run) in runs(!row.touch()) {
             let u = p.u_lo + col * (j as f64 + 0.5 * run as f64);
             cands.push((run as f64, u, w));
         }
