@@ -8,8 +8,8 @@ use crate::scene::{
 };
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
+use sightline_core::check::{aggregate, check_cell_prepared, report_json, TruthOptions};
 use sightline_geom::{DVec3, ViewCell};
-use sightline_methods::check::{aggregate, check_cell_prepared, report_json, TruthOptions};
 use sightline_methods::VisibilityMethod;
 use sightline_pvs::build::journal_path;
 use sightline_pvs::{BuildOptions, PvsFile, Shard, StoredPvs};
@@ -222,12 +222,12 @@ pub fn check(
                 None => {
                     let k = k.unwrap_or(20);
                     let c = detached(py, || {
-                        Ok(sightline_methods::check::street_cells(
+                        Ok(sightline_core::check::street_cells(
                             &scene.scene,
                             AUTO_CELL_M,
                             (1.5, 2.0),
                             k,
-                            sightline_methods::check::Clearance::Box,
+                            sightline_core::check::Clearance::Box,
                         ))
                     })?;
                     if c.is_empty() {

@@ -18,6 +18,7 @@ pub mod aabb;
 pub mod boolean;
 pub mod cell;
 pub mod grid;
+pub mod kdtree;
 pub mod polygon;
 pub mod predicates;
 

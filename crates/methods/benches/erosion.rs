@@ -4,8 +4,8 @@
 //! `cargo bench -p sightline-methods --bench erosion`
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use sightline_core::check::{street_cells, Clearance};
 use sightline_geom::{DVec2, Polygon};
-use sightline_methods::check::{street_cells, Clearance};
 use sightline_methods::{create, MethodOptions};
 use sightline_scene::{Object, Scene};
 use std::hint::black_box;

@@ -11,8 +11,8 @@
 //! on later runs, so that variants of a method are compared on the same sets cheaply.
 
 use rayon::prelude::*;
+use sightline_core::check::{TruthOptions, TruthScene};
 use sightline_geom::{Aabb2, ViewCell};
-use sightline_methods::check::{TruthOptions, TruthScene};
 use sightline_methods::{create, MethodOptions};
 use sightline_scene::import::{load, ImportOptions};
 use std::sync::Arc;

@@ -8,8 +8,8 @@
 //! have few free squares on one grid), without overlapping duplicates; `COUNT` of them
 //! spread evenly over those nearest the scene's middle, in a deterministic order.
 
+use sightline_core::check::{near_middle, street_cells, Clearance};
 use sightline_geom::ViewCell;
-use sightline_methods::check::{near_middle, street_cells, Clearance};
 use sightline_scene::import::{load, ImportOptions};
 use sightline_scene::Scene;
 

@@ -8,8 +8,8 @@
 //! those of the per-cell tests alone. `EROSION_REPEAT=N` times every cell N times (for
 //! profiles of the per-cell tests); `EROSION_BINS=N` sets the number of azimuth bins.
 
+use sightline_core::check::{street_cells, Clearance};
 use sightline_geom::ViewCell;
-use sightline_methods::check::{street_cells, Clearance};
 use sightline_methods::{create, MethodOptions};
 use sightline_scene::import::{load, ImportOptions};
 use std::sync::Arc;

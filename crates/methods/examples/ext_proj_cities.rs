@@ -14,8 +14,8 @@
 //! `EXTPROJ_DIAG=2` classifies them by their best plane: Projection off every plane,
 //! or the fraction of its pixels covered by nearer occluders (≥ 90 %: a near miss).
 
+use sightline_core::check::{ground_truth, street_cells, Clearance, TruthOptions};
 use sightline_geom::ViewCell;
-use sightline_methods::check::{ground_truth, street_cells, Clearance, TruthOptions};
 use sightline_methods::ext_proj::occludee_projection;
 use sightline_methods::ext_proj::{depth_down, pixel_range};
 use sightline_methods::ext_proj::{ExtProj, Params};

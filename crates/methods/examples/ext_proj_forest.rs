@@ -18,8 +18,8 @@
 //! `ASPECT=a:b`, `TRUNK=a:b`, `LIFT` override the dense preset (for tuning).
 
 use rayon::prelude::*;
+use sightline_core::check::{aggregate, compare, TruthOptions, TruthScene};
 use sightline_geom::ViewCell;
-use sightline_methods::check::{aggregate, compare, TruthOptions, TruthScene};
 use sightline_methods::ext_proj::{ExtProj, Params};
 use sightline_methods::VisibilityMethod;
 use sightline_scene::generate::{forest_with, ForestParams};

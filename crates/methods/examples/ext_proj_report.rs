@@ -6,8 +6,8 @@
 //! curve (Fig. 12) and the improved-projection gain. With `forest` instead of a path
 //! it builds a synthetic forest and prints plain vs sweep with 1, 5, 15 planes.
 
+use sightline_core::check::{street_cells, Clearance};
 use sightline_geom::{DVec2, DVec3, Polygon, ViewCell};
-use sightline_methods::check::{street_cells, Clearance};
 use sightline_methods::ext_proj::experiments::{improved_gain, resolution_curve, run, sweep_curve};
 use sightline_methods::ext_proj::Params;
 use sightline_methods::{create, MethodOptions};

@@ -12,8 +12,8 @@
 //! The change of a variant is `|VS_base Δ VS_variant| / |VS_base|` (symmetric
 //! difference, so an object gained and one lost count twice).
 
+use sightline_core::check::{street_cells_among, Clearance, TruthOptions, TruthScene};
 use sightline_geom::ViewCell;
-use sightline_methods::check::{street_cells_among, Clearance, TruthOptions, TruthScene};
 use sightline_scene::import::{load, ImportOptions};
 use std::time::Instant;
 

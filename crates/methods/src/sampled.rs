@@ -7,8 +7,8 @@
 //! Parameters: `samples` (viewpoints per cell) and `resolution_px` (cube-face side);
 //! defaults from [`TruthOptions::default`].
 
-use crate::check::{TruthOptions, TruthScene};
-use crate::{MethodError, MethodOptions, VisibilityMethod};
+use sightline_core::check::{TruthOptions, TruthScene};
+use sightline_core::{MethodError, SampledOptions, VisibilityMethod};
 use sightline_geom::ViewCell;
 use sightline_scene::Scene;
 use std::sync::Arc;
@@ -30,24 +30,14 @@ impl Sampled {
 
 /// Prepare `sampled` for `scene`.
 pub(crate) fn create(
-    name: &'static str,
     scene: Arc<Scene>,
-    opts: &MethodOptions,
+    opts: &SampledOptions,
 ) -> Result<Box<dyn VisibilityMethod>, MethodError> {
-    if name != "sampled" {
-        return Err(MethodError::Unknown(name.to_string()));
-    }
     let mut t = TruthOptions::default();
     if let Some(r) = opts.resolution_px {
-        if r == 0 {
-            return Err(MethodError::Other("resolution must be positive".into()));
-        }
         t.resolution_px = r;
     }
     if let Some(s) = opts.samples {
-        if s == 0 {
-            return Err(MethodError::Other("samples must be positive".into()));
-        }
         t.samples = s;
     }
     Ok(Box::new(Sampled::new(&scene, t)))

@@ -39,8 +39,8 @@
 //! Along those, most prisms of a bucket stand beside the ray: a ray missing a prism's
 //! (slightly widened) bounding box is passed without testing its edges.
 
-use crate::occluders::{local_rings, BucketGrid, Occluder, Stamps, GROUND_M};
 use sightline_geom::{Aabb3, DVec2};
+use sightline_scene::occluders::{local_rings, BucketGrid, Occluder, Stamps, GROUND_M};
 use sightline_scene::Scene;
 
 /// Candidate eyes per side of the cell's top face.
@@ -601,8 +601,8 @@ fn crossings(edges: &[[DVec2; 2]], eye: DVec2, d: DVec2) -> Option<(f64, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::occluders::collect_occluders;
     use sightline_geom::{DVec3, Polygon};
+    use sightline_scene::occluders::collect_occluders;
     use sightline_scene::Object;
 
     fn marks(scene: &Scene, cell: Aabb3) -> Vec<bool> {
@@ -659,9 +659,9 @@ mod tests {
 #[cfg(test)]
 mod cull_props {
     use super::*;
-    use crate::occluders::collect_occluders;
     use proptest::prelude::*;
     use sightline_geom::{DVec3, Polygon};
+    use sightline_scene::occluders::collect_occluders;
     use sightline_scene::Object;
 
     /// `(x, y, w, d)` on a 5 m raster and a height.

@@ -4,8 +4,8 @@
 //! scene or a clear error, and the PVS of a conservative method keeps what the ground
 //! truth sees.
 
+use sightline_core::check::{TruthOptions, TruthScene};
 use sightline_geom::{DVec2, DVec3, Polygon, ViewCell};
-use sightline_methods::check::{TruthOptions, TruthScene};
 use sightline_methods::dual_ray::{DualRay, Planarity};
 use sightline_methods::{create, Method, MethodOptions, VisibilityMethod};
 use sightline_scene::generate::city;

@@ -2,7 +2,7 @@
 //! BD TOPO, Den Haag tile 01): the discretized PVS contains the exact one, every cell
 //! keeps the objects around it, and the methods cull something.
 
-use sightline_methods::check::{near_middle, street_cells, Clearance};
+use sightline_core::check::{near_middle, street_cells, Clearance};
 use sightline_methods::dual_ray::{DualRay, Planarity};
 use sightline_scene::import::{load, ImportOptions};
 use std::path::PathBuf;

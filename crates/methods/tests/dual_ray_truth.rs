@@ -1,8 +1,8 @@
 //! `dual-ray` and `dual-ray-exact` against the sampled ground truth
-//! (`sightline_methods::check`): missed = 0 on a generated city and on street cells of
+//! (`sightline_core::check`): missed = 0 on a generated city and on street cells of
 //! the real scenes.
 
-use sightline_methods::check::{check_cell_prepared, TruthOptions, TruthScene};
+use sightline_core::check::{check_cell_prepared, TruthOptions, TruthScene};
 use sightline_methods::{create, MethodOptions};
 use sightline_scene::cells::grid_cells;
 use sightline_scene::generate::city;

@@ -1,14 +1,14 @@
 //! `erosion-rays` (the X-sampling ray test of §7.1, Theorem 2): hand-checked facts on
 //! fixture scenes, `missed = 0` against the sampled ground truth (`sampled`,
-//! `sightline_methods::check`) on random generated cities, and a side-by-side with
+//! `sightline_core::check`) on random generated cities, and a side-by-side with
 //! `erosion` and `erosion-cell` on the same cells.
 
 mod erosion_support;
 
 use erosion_support::*;
 use proptest::prelude::*;
+use sightline_core::check::{check_cell_prepared, TruthOptions, TruthScene};
 use sightline_geom::ViewCell;
-use sightline_methods::check::{check_cell_prepared, TruthOptions, TruthScene};
 use sightline_methods::{create, MethodOptions, VisibilityMethod};
 use sightline_scene::cells::grid_cells;
 use sightline_scene::generate::city;

@@ -6,8 +6,8 @@ mod erosion_support;
 
 use erosion_support::*;
 use proptest::prelude::*;
+use sightline_core::check::{near_middle, street_cells, Clearance};
 use sightline_geom::{Aabb2, DVec2, ViewCell};
-use sightline_methods::check::{near_middle, street_cells, Clearance};
 use sightline_methods::erosion::{ErosionMethod, Variant};
 use sightline_methods::{MethodOptions, VisibilityMethod};
 use sightline_scene::import::{load, ImportOptions};

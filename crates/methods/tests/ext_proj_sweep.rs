@@ -125,7 +125,7 @@ fn leaves_fill_the_occlusion_maps() {
 /// extended projections cannot (leaves are not occluders there: only the thin trunks).
 #[test]
 fn sweep_culls_the_dense_generated_forest_without_missing() {
-    use sightline_methods::check::{ground_truth, TruthOptions};
+    use sightline_core::check::{ground_truth, TruthOptions};
     use sightline_scene::generate::{forest_with, ForestParams};
     let scene = Arc::new(forest_with(1, &ForestParams::dense(100)));
     // A 0.5 m cell between four trees near a corner of the 10 × 10 grid (4 m spacing),

@@ -1,8 +1,8 @@
 //! Fixture scenes with hand-checked facts (in the manner of ericw-tools' test maps):
 //! the ground truth must find exactly the expected visible sets.
 
+use sightline_core::check::{ground_truth, TruthOptions, TruthScene};
 use sightline_geom::{DVec2, DVec3, Polygon, ViewCell};
-use sightline_methods::check::{ground_truth, TruthOptions, TruthScene};
 use sightline_scene::{Object, Scene};
 
 fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Polygon {

@@ -7,7 +7,7 @@
 //! Without `SIGHTLINE_REAL_OSM` (a bare `cargo test`) the test says so and does
 //! nothing; the test script always sets it and fails if the download fails.
 
-use sightline_methods::check::{compare, street_cells, Clearance, TruthOptions, TruthScene};
+use sightline_core::check::{compare, street_cells, Clearance, TruthOptions, TruthScene};
 use sightline_methods::{create, Method, MethodOptions};
 use sightline_scene::import::{load, ImportOptions};
 use std::path::PathBuf;

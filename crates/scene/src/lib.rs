@@ -21,3 +21,4 @@ pub mod generate;
 pub mod import;
 pub mod index;
 pub mod info;
+pub mod occluders;

@@ -17,8 +17,8 @@
 //! and a *missed* tile is one the plain client requests that holds a truly visible
 //! feature but the PVS client does not request.
 
+use sightline_core::check::{ground_truth, TruthScene};
 use sightline_geom::{DVec3, ViewCell};
-use sightline_methods::check::{ground_truth, TruthScene};
 use sightline_scene::{generate, import, Scene};
 use sightline_tiles::layout::Layout;
 use sightline_tiles::sse::{requested, Camera};

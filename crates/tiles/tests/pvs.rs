@@ -51,12 +51,12 @@ proptest! {
 fn sidecar_from_a_pvs_file_holds_every_tile_the_truth_sees() {
     let scene = std::sync::Arc::new(generate::city(1, 40));
     let layout = Layout::build(&scene, 4).unwrap();
-    let cells = sightline_methods::check::street_cells(
+    let cells = sightline_core::check::street_cells(
         &scene,
         10.0,
         (1.5, 2.0),
         2,
-        sightline_methods::check::Clearance::Box,
+        sightline_core::check::Clearance::Box,
     );
     let method = sightline_methods::create("dual-ray", scene.clone(), &Default::default()).unwrap();
     let sets: Vec<Vec<u32>> = cells.iter().map(|c| method.pvs(c).unwrap()).collect();
@@ -72,7 +72,7 @@ fn sidecar_from_a_pvs_file_holds_every_tile_the_truth_sees() {
     let sc = sightline_tiles::sidecar_from_pvs(&scene, &layout, &file).unwrap();
     assert_eq!(sc.cells.len(), cells.len());
     for (c, cellbox) in sc.cells.iter().zip(&cells) {
-        let truth = sightline_methods::check::ground_truth(&scene, cellbox, &Default::default());
+        let truth = sightline_core::check::ground_truth(&scene, cellbox, &Default::default());
         for id in truth.visible {
             let p = layout.placement[id as usize];
             let uri = layout.tiles[p.tile as usize].content_uri().unwrap();

@@ -8,9 +8,9 @@ use super::suite::{Suite, NO_REPEAT_MS};
 use anyhow::Context;
 use rayon::prelude::*;
 use serde::Serialize;
+use sightline_core::check::{TruthOptions, TruthScene};
 use sightline_geom::ViewCell;
-use sightline_methods::check::{TruthOptions, TruthScene};
-use sightline_methods::{create, MethodError, MethodOptions, VisibilityMethod};
+use sightline_methods::{create, MethodOptions, VisibilityMethod};
 use sightline_scene::Scene;
 use sightline_stats::{loglog_slope, mean, median, quantile};
 use std::collections::HashMap;
@@ -90,7 +90,7 @@ pub fn pick_cells(scene: &Scene, size_m: f64, n: usize) -> Vec<ViewCell> {
     if all.len() <= n {
         return all;
     }
-    sightline_methods::check::near_middle(scene, &all, n, 8)
+    sightline_core::check::near_middle(scene, &all, n, 8)
 }
 
 impl Bench {
@@ -158,13 +158,6 @@ impl Bench {
     ) -> Option<Box<dyn VisibilityMethod>> {
         match create(name, s.scene.clone(), opts) {
             Ok(m) => Some(m),
-            Err(MethodError::NotImplemented(_)) => {
-                let note = format!("`{name}` is not available in this build: skipped.");
-                if !self.notes.contains(&note) {
-                    self.notes.push(note);
-                }
-                None
-            }
             Err(e) => {
                 self.notes
                     .push(format!("`{name}` failed to prepare on {}: {e}", s.name));

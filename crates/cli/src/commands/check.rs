@@ -3,8 +3,8 @@
 use crate::cli::Command;
 use crate::common::{load_scene, method_options, print_json, progress};
 use anyhow::{bail, Context};
+use sightline_core::check::{check_cells, report_json, street_cells, Clearance, TruthOptions};
 use sightline_geom::ViewCell;
-use sightline_methods::check::{check_cells, report_json, street_cells, Clearance, TruthOptions};
 use sightline_methods::{create, VisibilityMethod};
 use sightline_pvs::{PvsFile, StoredPvs};
 use std::sync::Arc;

@@ -12,7 +12,7 @@ use crate::common::write_atomic;
 use anyhow::Context;
 use serde::Serialize;
 use sightline_geom::ViewCell;
-use sightline_methods::{create, MethodError, MethodOptions, METHOD_NAMES};
+use sightline_methods::{create, MethodOptions, METHOD_NAMES};
 use sightline_scene::import::{self, ImportOptions};
 use sightline_scene::{cells, generate, Scene};
 use std::sync::Arc;
@@ -136,10 +136,6 @@ fn run_method(name: &str, scene: &Arc<Scene>, cells: &[ViewCell], quiet: bool) -
     };
     let method = match create(name, scene.clone(), &MethodOptions::default()) {
         Ok(m) => m,
-        Err(MethodError::NotImplemented(_)) => {
-            row.status = "not available yet".into();
-            return row;
-        }
         Err(e) => {
             row.status = format!("failed: {e}");
             return row;
@@ -152,10 +148,6 @@ fn run_method(name: &str, scene: &Arc<Scene>, cells: &[ViewCell], quiet: bool) -
     for c in cells {
         match method.pvs(c) {
             Ok(v) => sizes.push(v.len()),
-            Err(MethodError::NotImplemented(_)) => {
-                row.status = "not available yet".into();
-                break;
-            }
             Err(e) => {
                 row.status = format!("failed on cell {c}: {e}");
                 break;

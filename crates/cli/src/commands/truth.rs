@@ -3,7 +3,7 @@
 use crate::cli::Command;
 use crate::common::{load_scene, print_json};
 use anyhow::bail;
-use sightline_methods::check::{TruthOptions, TruthScene};
+use sightline_core::check::{TruthOptions, TruthScene};
 use std::io::IsTerminal;
 
 /// Largest accepted cube-face resolution and sample count (memory and time stay sane).

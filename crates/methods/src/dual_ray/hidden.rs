@@ -32,8 +32,8 @@
 
 use super::occluders::{Axis, Decomposition};
 use super::plane::{local_rect, Rect};
-use crate::occluders::{bucket_of, BucketGrid};
 use sightline_geom::{Aabb3, DVec2};
+use sightline_scene::occluders::{bucket_of, BucketGrid};
 
 /// Fine buckets of the occluder grid per cover cell, along each side.
 pub(crate) const COVER_FACTOR: usize = 4;

@@ -13,9 +13,9 @@
 //! Every `dual-ray` PVS contains the `dual-ray-exact` PVS of the same cell.
 //!
 //! Pipeline (one module per step):
-//! * `occluders` — the ground-based inner prisms of `crate::occluders`, touching ones fused,
+//! * `occluders` — the ground-based inner prisms of `sightline_scene::occluders`, touching ones fused,
 //!   decomposed into slabs along x and y, once per scene;
-//! * `crate::kdtree` — the hierarchical subdivision of the occludees (§3): a node hidden
+//! * `sightline_geom::kdtree` — the hierarchical subdivision of the occludees (§3): a node hidden
 //!   from the cell stops the recursion; objects of visible leaves are tested one by one
 //!   (their outer prisms' boxes); the nearer child first (front to back);
 //!   a kd-node below a node its test left visible is tested only every
@@ -91,13 +91,13 @@ mod witness;
 
 pub use table1::{crossing_cells, table1, Table1Row};
 
-use crate::kdtree::{KdTree, NodeKind};
 use crate::seed::{SeedGrid, SeedScratch};
-use crate::{MethodError, MethodOptions, VisibilityMethod};
 use hidden::HiddenSet;
 use occluders::{Axis, Decomposition};
 use plane::{Hidden, Planar, Scratch};
 use rayon::prelude::*;
+use sightline_core::{DualRayOptions, Method, MethodError, VisibilityMethod};
+use sightline_geom::kdtree::{KdTree, NodeKind};
 use sightline_geom::{Aabb3, DVec2, DVec3, ViewCell};
 use sightline_scene::Scene;
 use std::sync::Arc;
@@ -228,24 +228,23 @@ pub struct DualRay {
 
 /// Prepare `dual-ray` or `dual-ray-exact` for `scene`.
 pub(crate) fn create(
-    name: &'static str,
+    method: Method,
     scene: Arc<Scene>,
-    opts: &MethodOptions,
+    opts: &DualRayOptions,
 ) -> Result<Box<dyn VisibilityMethod>, MethodError> {
-    let planarity = match name {
-        "dual-ray" => {
-            let r = opts.resolution_px.unwrap_or(DEFAULT_RESOLUTION);
-            if r == 0 || r > 1 << 20 {
-                return Err(MethodError::Other(format!(
-                    "dual-ray: resolution {r} out of range (1..=1048576)"
-                )));
-            }
-            Planarity::Discrete { resolution_px: r }
-        }
-        "dual-ray-exact" => Planarity::Exact,
-        n => return Err(MethodError::Unknown(n.to_string())),
+    let planarity = match method {
+        Method::DualRay => Planarity::Discrete {
+            resolution_px: opts.resolution_px.unwrap_or(DEFAULT_RESOLUTION),
+        },
+        Method::DualRayExact => Planarity::Exact,
+        m => return Err(MethodError::Unknown(m.name().to_string())),
     };
-    Ok(Box::new(DualRay::new(name, scene, planarity)))
+    Ok(Box::new(
+        DualRay::new(method.name(), scene, planarity)
+            .with_seed(opts.seed_rays)
+            .with_virtual_occluders(opts.virtual_occluders)
+            .with_hidden_occluders(opts.hidden_boxes),
+    ))
 }
 
 impl DualRay {
@@ -260,8 +259,8 @@ impl DualRay {
     /// Prepare the method: fused occluder decompositions along x and y, kd-tree of the
     /// occludees.
     pub fn new(name: &'static str, scene: Arc<Scene>, planarity: Planarity) -> Self {
-        let origin = crate::occluders::local_origin(&scene);
-        let occ = crate::occluders::collect_occluders(&scene, origin);
+        let origin = sightline_scene::occluders::local_origin(&scene);
+        let occ = sightline_scene::occluders::collect_occluders(&scene, origin);
         let clusters = occluders::clusters(&occ);
         let ((decomp_x, decomp_y), seed) = rayon::join(
             || {

@@ -20,11 +20,11 @@
 //! stack, and a stack is fused at query time (by the planar problems of `plane`). Lines
 //! `x = const` are never rays of a shaft along `x`, so no crack can appear there.
 //!
-//! The prisms are the shared ground-based ones of [`crate::occluders`] (Observation 1 of
+//! The prisms are the shared ground-based ones of [`sightline_scene::occluders`] (Observation 1 of
 //! the paper needs occluders that contain the vertical wall under their top).
 
-use crate::occluders::{BucketGrid, Occluder};
 use sightline_geom::{orient2d, DVec2, Orientation};
+use sightline_scene::occluders::{BucketGrid, Occluder};
 
 /// Two edges of a stack closer than this (at both slab ends) are the same wall: a party
 /// wall between touching buildings. One nanometre: float noise, not a gap anyone sees.

@@ -33,8 +33,8 @@
 
 use super::hidden::{Cover, HiddenSet};
 use super::occluders::{Axis, Decomposition, Slab, Trap};
-use crate::occluders::Stamps;
 use sightline_geom::{orient2d, Aabb3, DVec2, Orientation};
+use sightline_scene::occluders::Stamps;
 
 /// Kept pieces of the ceiling cut are shrunk by this much along `x` (metres): rounding
 /// in `x*(h)` must never make an occluder larger than it is.

@@ -3,7 +3,7 @@
 //! crack along shared edges), and the filling of closed courtyards.
 //!
 //! Occluders are the *inner* bounds of the objects (§4.2) standing on the ground, the
-//! ground prisms of the methods' one occluder model (`crate::occluders`); their
+//! ground prisms of the methods' one occluder model (`sightline_scene::occluders`); their
 //! union with the ground half-space is a height field `H(x, y)`. It is stored on a
 //! square pixel grid as an **inner raster** `G`: `G(q) ≤ H(x)` for every point `x` of
 //! pixel `q`. A pixel gets `G(q) = min h_b` over the prisms `b` touching it, if it lies
@@ -23,8 +23,8 @@
 //! is `z1` and whose free pixels escape below `f_c`, the filled field keeps `F(q)` where
 //! `F(q) > max(z1, f_c)` and `G(q)` elsewhere (see [`HeightField::filled`]).
 
-use crate::occluders::ground_prisms;
 use sightline_geom::{boolean, Aabb2, DVec2, Polygon};
+use sightline_scene::occluders::ground_prisms;
 use sightline_scene::Scene;
 use std::sync::OnceLock;
 
@@ -411,7 +411,7 @@ fn merge(ranges: impl Iterator<Item = (i64, i64)>) -> Vec<(i64, i64)> {
 }
 
 impl HeightField {
-    /// Rasterize the ground prisms of `scene` (`crate::occluders::ground_prisms`).
+    /// Rasterize the ground prisms of `scene` (`sightline_scene::occluders::ground_prisms`).
     pub fn build(scene: &Scene) -> Self {
         let mut prisms: Vec<(&Polygon, u16, Aabb2)> = Vec::new();
         for (_, p) in ground_prisms(scene) {

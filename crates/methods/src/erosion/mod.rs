@@ -54,14 +54,14 @@ pub mod rays;
 pub mod shrink;
 pub mod tiles;
 
-use crate::occluders::{collect_occluders, local_origin};
 use crate::seed::{SeedGrid, SeedScratch};
-use crate::{MethodError, MethodOptions, VisibilityMethod};
 use erode::Element;
 use field::{HeightField, MinPyramid};
 use occlusion::{Bins, PolarMap, Target};
 use shrink::Region;
+use sightline_core::{ErosionOptions, Method, MethodError, MethodOptions, VisibilityMethod};
 use sightline_geom::{Aabb2, Aabb3, DVec2, ViewCell};
+use sightline_scene::occluders::{collect_occluders, local_origin};
 use sightline_scene::Scene;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -106,21 +106,30 @@ pub enum Variant {
     Rays,
 }
 
-/// Prepare `name` (one of the four erosion methods) for `scene`.
-pub fn create(
-    name: &'static str,
+/// Prepare `method` (one of the erosion family) for `scene`.
+pub(crate) fn create(
+    method: Method,
     scene: Arc<Scene>,
-    opts: &MethodOptions,
+    opts: &ErosionOptions,
 ) -> Result<Box<dyn VisibilityMethod>, MethodError> {
-    let variant = match name {
-        "erosion" => Variant::Full,
-        "erosion-segment" => Variant::Segment,
-        "erosion-cell" => Variant::Cell,
-        "shrink-sphere" => Variant::Sphere,
-        "erosion-rays" => Variant::Rays,
-        n => return Err(MethodError::Unknown(n.to_string())),
+    let variant = match method {
+        Method::Erosion => Variant::Full,
+        Method::ErosionSegment => Variant::Segment,
+        Method::ErosionCell => Variant::Cell,
+        Method::ShrinkSphere => Variant::Sphere,
+        Method::ErosionRays => Variant::Rays,
+        m => return Err(MethodError::Unknown(m.name().to_string())),
     };
-    Ok(Box::new(ErosionMethod::new(name, variant, scene, opts)?))
+    let settings = MethodOptions {
+        resolution_px: opts.azimuth_bins,
+        ..MethodOptions::default()
+    };
+    Ok(Box::new(ErosionMethod::new(
+        method.name(),
+        variant,
+        scene,
+        &settings,
+    )?))
 }
 
 /// One occludee top face: an outer prism's exterior ring at its top height.

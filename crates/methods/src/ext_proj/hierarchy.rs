@@ -9,7 +9,7 @@
 //! bears on conservativeness, drawn with the same test as an object's). A fully
 //! visible node only saves the tests of its objects, which go into the PVS.
 
-use crate::kdtree::{KdTree, NodeKind};
+use sightline_geom::kdtree::{KdTree, NodeKind};
 use sightline_geom::Aabb3;
 
 /// Occludees per leaf of the hierarchy.

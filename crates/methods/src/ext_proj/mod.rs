@@ -54,11 +54,11 @@ pub use planes::{Direction, LocalBox, Plane};
 pub use projection::{extended_projection, ConvexOccluder};
 pub use sweep::{Sweep, SweepPlane};
 
-use crate::{MethodError, MethodOptions, VisibilityMethod};
 use depth_map::{clipped_pixel_range, depth_up, CoverageBuilder};
 use hierarchy::{Hierarchy, Verdict};
 use planes::candidate_positions;
 use projection::{plane_safe_projections, FACE_CLEARANCE_M};
+use sightline_core::{ExtProjOptions, Method, MethodError, MethodOptions, VisibilityMethod};
 use sightline_geom::{Aabb3, DVec2, DVec3, ViewCell};
 use sightline_scene::Scene;
 use std::sync::Arc;
@@ -131,7 +131,17 @@ impl Default for Params {
 }
 
 impl Params {
+    /// The parameters for user settings (validated through the registry's knobs).
     pub fn from_options(opts: &MethodOptions) -> Self {
+        Self::from_typed(&ExtProjOptions {
+            resolution_px: opts.resolution_px,
+            sweep: opts.sweep,
+            planes: opts.planes,
+        })
+    }
+
+    /// The parameters for the typed options of the registry.
+    pub fn from_typed(opts: &ExtProjOptions) -> Self {
         let mut p = Params {
             sweep: opts.sweep,
             ..Params::default()
@@ -201,14 +211,14 @@ pub struct ExtProj {
 
 /// Prepare `ext-proj` for `scene`.
 pub(crate) fn create(
-    name: &'static str,
+    method: Method,
     scene: Arc<Scene>,
-    opts: &MethodOptions,
+    opts: &ExtProjOptions,
 ) -> Result<Box<dyn VisibilityMethod>, MethodError> {
-    if name != "ext-proj" {
-        return Err(MethodError::Unknown(name.to_string()));
+    if method != Method::ExtProj {
+        return Err(MethodError::Unknown(method.name().to_string()));
     }
-    Ok(Box::new(ExtProj::new(scene, Params::from_options(opts))))
+    Ok(Box::new(ExtProj::new(scene, Params::from_typed(opts))))
 }
 
 /// Whether the Projection of box `b` (world) on `plane` — its standard rectangle and,

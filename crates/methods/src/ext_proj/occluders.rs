@@ -2,7 +2,7 @@
 //! §3.3 and §6.1 "Occluder selection").
 //!
 //! * Occluders are the objects' *inner* 2.5D prisms, those of the methods' one occluder
-//!   model (`crate::occluders`, in scene coordinates). Touching buildings are fused
+//!   model (`sightline_scene::occluders`, in scene coordinates). Touching buildings are fused
 //!   first: the ground prisms (base exactly on the ground: a gap under a raised prism
 //!   must stay open) form a height field whose level sets `{H ≥ h}` are unioned and
 //!   extruded from the ground to `h`; each union is split into convex pieces
@@ -21,9 +21,9 @@
 //!   (§6.1: "we also use the PVS of the parent cell to cull hidden occluders").
 
 use super::projection::{clip_halfplane, polygon_area, ConvexOccluder};
-use crate::occluders::{inner_prisms, stands_on_ground};
 use rstar::{primitives::GeomWithData, primitives::Rectangle, RTree, AABB};
 use sightline_geom::{boolean, Aabb3, DVec2, Polygon};
+use sightline_scene::occluders::{inner_prisms, stands_on_ground};
 use sightline_scene::{Geometry, Scene};
 use std::collections::HashMap;
 

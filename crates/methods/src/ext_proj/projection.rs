@@ -15,8 +15,8 @@
 //! slicing; the union-aware inner coverage of `depth_map.rs` then fuses the pieces.
 
 use super::planes::{view, Direction, LocalBox};
-use crate::occluders::GROUND_M;
 use sightline_geom::{DVec2, DVec3};
+use sightline_scene::occluders::GROUND_M;
 
 /// Minimum clearance between a clipped occluder and the cell's far face along the
 /// depth axis, so every view is a finite central projection.

@@ -21,15 +21,15 @@
 //! conservative: an occluder left out can only make more visible. Ext-proj, whose
 //! occluders are any convex solids, uses them as they are.
 
+use crate::{Prism, Scene};
 use sightline_geom::{DVec2, Polygon};
-use sightline_scene::{Prism, Scene};
 
 /// A prism whose base is at most this high stands on the ground.
-pub(crate) const GROUND_M: f64 = 0.0;
+pub const GROUND_M: f64 = 0.0;
 
 /// One ground-based occluder prism, in local scene coordinates.
 #[derive(Clone, Debug)]
-pub(crate) struct Occluder {
+pub struct Occluder {
     /// Rings (exterior and holes), open.
     pub rings: Vec<Vec<DVec2>>,
     pub height: f64,
@@ -47,7 +47,7 @@ pub(crate) struct Occluder {
 /// border the two may differ by an ulp, which only decides in which of two neighbouring
 /// buckets a point lying on the border is looked up.
 #[inline]
-pub(crate) fn bucket_of(v: f64, origin: f64, inv_m: f64, n: usize) -> usize {
+pub fn bucket_of(v: f64, origin: f64, inv_m: f64, n: usize) -> usize {
     (((v - origin) * inv_m) as usize).min(n - 1)
 }
 
@@ -55,14 +55,14 @@ pub(crate) fn bucket_of(v: f64, origin: f64, inv_m: f64, n: usize) -> usize {
 /// buckets is handled once): [`Stamps::next`] starts a walk by taking a new generation,
 /// so the marks are cleared only when the ids outgrow them or the generation wraps.
 #[derive(Clone, Debug, Default)]
-pub(crate) struct Stamps {
+pub struct Stamps {
     pub marks: Vec<u32>,
     gen: u32,
 }
 
 impl Stamps {
     /// A new walk over ids `0..len`: its generation.
-    pub(crate) fn next(&mut self, len: usize) -> u32 {
+    pub fn next(&mut self, len: usize) -> u32 {
         // Grown (geometrically: the hidden boxes grow during a traversal) with marks 0,
         // older than any generation handed out after it.
         if self.marks.len() < len {
@@ -81,7 +81,7 @@ impl Stamps {
 /// A uniform grid of the ids of boxes (slabs, prisms) over the scene, in local
 /// coordinates: each id is in every bucket its box meets.
 #[derive(Clone, Debug)]
-pub(crate) struct BucketGrid {
+pub struct BucketGrid {
     pub origin: DVec2,
     pub cell_m: f64,
     /// `1 / cell_m`.
@@ -96,10 +96,7 @@ pub(crate) struct BucketGrid {
 impl BucketGrid {
     /// The grid of `boxes` (`(min, max)`, id = index), with buckets of
     /// `cell_m(extent, count)` metres.
-    pub(crate) fn from_boxes(
-        boxes: &[(DVec2, DVec2)],
-        cell_m: impl FnOnce(DVec2, usize) -> f64,
-    ) -> Self {
+    pub fn from_boxes(boxes: &[(DVec2, DVec2)], cell_m: impl FnOnce(DVec2, usize) -> f64) -> Self {
         let mut min = DVec2::splat(f64::INFINITY);
         let mut max = DVec2::splat(f64::NEG_INFINITY);
         for (a, b) in boxes {
@@ -153,7 +150,7 @@ impl BucketGrid {
     }
 
     /// Per bucket, the largest `value` of its ids (−∞ for an empty bucket).
-    pub(crate) fn max_per_bucket(&self, value: impl Fn(u32) -> f64) -> Vec<f64> {
+    pub fn max_per_bucket(&self, value: impl Fn(u32) -> f64) -> Vec<f64> {
         self.start
             .windows(2)
             .map(|w| {
@@ -166,15 +163,15 @@ impl BucketGrid {
     }
 
     #[inline]
-    pub(crate) fn col(&self, x: f64) -> usize {
+    pub fn col(&self, x: f64) -> usize {
         bucket_of(x, self.origin.x, self.inv_m, self.nx)
     }
     #[inline]
-    pub(crate) fn row(&self, y: f64) -> usize {
+    pub fn row(&self, y: f64) -> usize {
         bucket_of(y, self.origin.y, self.inv_m, self.ny)
     }
     #[inline]
-    pub(crate) fn bucket(&self, c: usize, r: usize) -> &[u32] {
+    pub fn bucket(&self, c: usize, r: usize) -> &[u32] {
         let i = r * self.nx + c;
         &self.ids[self.start[i] as usize..self.start[i + 1] as usize]
     }
@@ -182,7 +179,7 @@ impl BucketGrid {
 
 /// The inner prisms of `scene` that can occlude, with their object's id, in object
 /// order.
-pub(crate) fn inner_prisms(scene: &Scene) -> impl Iterator<Item = (u32, &Prism)> {
+pub fn inner_prisms(scene: &Scene) -> impl Iterator<Item = (u32, &Prism)> {
     scene.objects.iter().enumerate().flat_map(|(id, o)| {
         o.inner
             .iter()
@@ -192,12 +189,12 @@ pub(crate) fn inner_prisms(scene: &Scene) -> impl Iterator<Item = (u32, &Prism)>
 }
 
 /// The inner prisms of `scene` standing on the ground, with their object's id.
-pub(crate) fn ground_prisms(scene: &Scene) -> impl Iterator<Item = (u32, &Prism)> {
+pub fn ground_prisms(scene: &Scene) -> impl Iterator<Item = (u32, &Prism)> {
     inner_prisms(scene).filter(|(_, p)| stands_on_ground(p))
 }
 
 /// Whether the prism stands on the ground (`base <= GROUND_M`).
-pub(crate) fn stands_on_ground(p: &Prism) -> bool {
+pub fn stands_on_ground(p: &Prism) -> bool {
     p.base <= GROUND_M
 }
 
@@ -212,7 +209,7 @@ fn is_solid(p: &Prism) -> bool {
 }
 
 /// The ground prisms ([`ground_prisms`]) as occluders, translated by `-origin`.
-pub(crate) fn collect_occluders(scene: &Scene, origin: DVec2) -> Vec<Occluder> {
+pub fn collect_occluders(scene: &Scene, origin: DVec2) -> Vec<Occluder> {
     ground_prisms(scene)
         .map(|(object, p)| {
             let rings = local_rings(&p.footprint, origin);
@@ -236,7 +233,7 @@ pub(crate) fn collect_occluders(scene: &Scene, origin: DVec2) -> Vec<Occluder> {
 /// The origin of the methods' local frame for `scene` (coordinates minus it keep their
 /// precision when the scene's own coordinates are large): the centre of its bounds,
 /// rounded to the metre.
-pub(crate) fn local_origin(scene: &Scene) -> DVec2 {
+pub fn local_origin(scene: &Scene) -> DVec2 {
     if scene.bounds.is_empty() {
         DVec2::ZERO
     } else {
@@ -246,7 +243,7 @@ pub(crate) fn local_origin(scene: &Scene) -> DVec2 {
 
 /// The rings (exterior and holes, at least 3 vertices) of `footprint` translated by
 /// `-origin`.
-pub(crate) fn local_rings(footprint: &Polygon, origin: DVec2) -> Vec<Vec<DVec2>> {
+pub fn local_rings(footprint: &Polygon, origin: DVec2) -> Vec<Vec<DVec2>> {
     footprint
         .rings()
         .filter(|r| r.len() >= 3)
@@ -257,7 +254,7 @@ pub(crate) fn local_rings(footprint: &Polygon, origin: DVec2) -> Vec<Vec<DVec2>>
 #[cfg(test)]
 mod tests {
     use super::*;
-    use sightline_scene::Object;
+    use crate::Object;
 
     /// A prism a micrometre above the ground is raised (the gap under it stays open);
     /// flat and inverted prisms occlude nothing.

@@ -7,6 +7,7 @@ use super::samples::{
     cell_hash, nudge_inward, polygon_area3, random_edge_point, random_point, random_top_edge_point,
     stratified,
 };
+use crate::Cell;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use sightline_geom::{DVec3, ViewCell};
@@ -199,18 +200,34 @@ impl TruthScene {
 
     /// Stratified viewpoints of `cell` in its free space.
     pub fn viewpoints(&self, cell: &ViewCell, opts: &TruthOptions) -> Vec<DVec3> {
-        let (lo, hi) = inset_box(cell);
-        let mut rng = Rng::new(opts.seed ^ cell_hash(cell));
+        self.viewpoints_in(&Cell::Box(*cell), opts)
+    }
+
+    /// Stratified viewpoints of a viewcell of any kind in its free space: those of its
+    /// bounding box (shrunk by [`INSET_M`]) that lie in the cell.
+    pub fn viewpoints_in(&self, cell: &Cell, opts: &TruthOptions) -> Vec<DVec3> {
+        let bounds = cell.bounds();
+        let (lo, hi) = inset_box(&bounds);
+        let mut rng = Rng::new(opts.seed ^ cell_hash(&bounds));
         let pts = stratified(lo, hi, opts.samples.max(1) as usize, &mut rng);
         pts.into_iter()
-            .filter(|p| p.z > INSET_M / 2.0 && !self.in_block(*p, INSET_M / 2.0))
+            .filter(|p| {
+                p.z > INSET_M / 2.0 && cell.contains(*p) && !self.in_block(*p, INSET_M / 2.0)
+            })
             .collect()
     }
 
     /// The ground-truth visible set of `cell`.
     pub fn ground_truth(&self, cell: &ViewCell, opts: &TruthOptions) -> Truth {
+        self.ground_truth_in(&Cell::Box(*cell), opts)
+    }
+
+    /// The ground-truth visible set of a viewcell of any kind (`Truth::cell` is its
+    /// bounding box).
+    pub fn ground_truth_in(&self, region: &Cell, opts: &TruthOptions) -> Truth {
         let t0 = Instant::now();
-        let vps = self.viewpoints(cell, opts);
+        let cell = &region.bounds();
+        let vps = self.viewpoints_in(region, opts);
         let res = opts.resolution_px.max(8);
         // Rendering: union of ids over viewpoints × faces, first witness kept.
         let seen: Vec<(Option<Witness>, bool)> = vps
@@ -281,7 +298,10 @@ impl TruthScene {
             let found: Vec<(usize, Witness)> = (0..self.objects)
                 .into_par_iter()
                 .filter(|&id| seen[id].is_none())
-                .filter_map(|id| self.targeted(id as u32, &vps, opts, cell).map(|w| (id, w)))
+                .filter_map(|id| {
+                    self.targeted(id as u32, &vps, opts, region)
+                        .map(|w| (id, w))
+                })
                 .collect();
             for (id, w) in found {
                 seen[id] = Some(w);
@@ -358,8 +378,9 @@ impl TruthScene {
         id: u32,
         vps: &[DVec3],
         opts: &TruthOptions,
-        cell: &ViewCell,
+        region: &Cell,
     ) -> Option<Witness> {
+        let cell = &region.bounds();
         let faces = &self.object_faces[id as usize];
         if faces.is_empty() {
             return None;
@@ -372,12 +393,15 @@ impl TruthScene {
             // of the cell's free space (what is seen only from a small part of the cell
             // is found without more renderings; the rays do not depend on `samples`).
             let fresh = lo + (hi - lo) * DVec3::new(rng.f64(), rng.f64(), rng.f64());
-            let vp =
-                if r % 2 == 0 && fresh.z > INSET_M / 2.0 && !self.in_block(fresh, INSET_M / 2.0) {
-                    fresh
-                } else {
-                    vps[(r + id as usize) % vps.len()]
-                };
+            let vp = if r % 2 == 0
+                && fresh.z > INSET_M / 2.0
+                && region.contains(fresh)
+                && !self.in_block(fresh, INSET_M / 2.0)
+            {
+                fresh
+            } else {
+                vps[(r + id as usize) % vps.len()]
+            };
             // An area-weighted face among those facing the viewpoint.
             let front = |f: &RFace| f.normal.is_none_or(|n| n.dot(vp - f.verts[0]) > 0.0);
             let total: f64 = faces

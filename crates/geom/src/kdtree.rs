@@ -4,30 +4,30 @@
 //! subtree. Used by `dual-ray` (§3 of Koltun et al. 2001) and by the occludee hierarchy
 //! of `ext-proj` (its `hierarchy`, §2.4 and §6.1 of Durand et al. 2000).
 
-use sightline_geom::Aabb3;
+use crate::Aabb3;
 
 #[derive(Clone, Debug)]
-pub(crate) enum NodeKind {
+pub enum NodeKind {
     Leaf { first: u32, len: u32 },
     Inner { left: u32, right: u32 },
 }
 
 #[derive(Clone, Debug)]
-pub(crate) struct Node {
+pub struct Node {
     pub bbox: Aabb3,
     pub kind: NodeKind,
 }
 
 /// A kd-tree over items `(id, box)`; `items` is permuted so that leaves own ranges.
 #[derive(Clone, Debug, Default)]
-pub(crate) struct KdTree {
+pub struct KdTree {
     pub nodes: Vec<Node>,
     pub items: Vec<(u32, Aabb3)>,
 }
 
 impl KdTree {
     /// The tree of `items`, at most `leaf_size` (≥ 1) per leaf.
-    pub(crate) fn build(mut items: Vec<(u32, Aabb3)>, leaf_size: usize) -> Self {
+    pub fn build(mut items: Vec<(u32, Aabb3)>, leaf_size: usize) -> Self {
         let mut nodes = Vec::new();
         if !items.is_empty() {
             let n = items.len();
@@ -36,7 +36,7 @@ impl KdTree {
         KdTree { nodes, items }
     }
 
-    pub(crate) fn leaf_items(&self, first: u32, len: u32) -> &[(u32, Aabb3)] {
+    pub fn leaf_items(&self, first: u32, len: u32) -> &[(u32, Aabb3)] {
         &self.items[first as usize..(first + len) as usize]
     }
 }

@@ -29,7 +29,7 @@
 //! are not viewpoints, nor points at or below the ground.
 //!
 //! ```
-//! use sightline_methods::check::{ground_truth, TruthOptions};
+//! use sightline_core::check::{ground_truth, TruthOptions};
 //! use sightline_scene::{Scene, Object};
 //! use sightline_geom::{Polygon, DVec2, ViewCell};
 //! // A 10 m high wall at y = 10..11 hides a 5 m block behind it, not a 40 m tower.
@@ -232,7 +232,7 @@ pub enum Clearance {
 /// scene's minimum corner, spread evenly over the scene in a deterministic order.
 ///
 /// ```
-/// use sightline_methods::check::{street_cells, Clearance};
+/// use sightline_core::check::{street_cells, Clearance};
 /// use sightline_scene::{Object, Scene};
 /// use sightline_geom::{DVec2, Polygon};
 /// // A 100 × 100 m scene with a 25 m wide building along its west side.
