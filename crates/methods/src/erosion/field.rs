@@ -24,6 +24,7 @@
 //! `F(q) > max(z1, f_c)` and `G(q)` elsewhere (see [`HeightField::filled`]).
 
 use sightline_geom::{boolean, Aabb2, DVec2, Polygon};
+use sightline_raster::pyramid::{reduce2x2, Keep, Max, Min};
 use sightline_scene::occluders::ground_prisms;
 use sightline_scene::Scene;
 use std::sync::OnceLock;
@@ -140,20 +141,17 @@ pub struct MinPyramid {
     pub max_levels: Vec<Grid>,
 }
 
-/// The next level of a pyramid: `f` of each 2 × 2 block (reads outside give 0).
-pub(crate) fn reduce(last: &Grid, f: impl Fn(u16, u16) -> u16) -> Grid {
-    let (nx, ny) = ((last.nx + 1) / 2, (last.ny + 1) / 2);
-    let mut g = Grid::zeros(last.origin, last.pixel_m * 2.0, nx, ny);
-    for j in 0..ny {
-        for i in 0..nx {
-            let m = f(
-                f(last.get(2 * i, 2 * j), last.get(2 * i + 1, 2 * j)),
-                f(last.get(2 * i, 2 * j + 1), last.get(2 * i + 1, 2 * j + 1)),
-            );
-            g.data[(j * nx + i) as usize] = m;
-        }
+/// The next level of a pyramid: `K` of each 2 × 2 block (reads outside give 0), by the
+/// raster crate's one pyramid reduction.
+pub(crate) fn reduce<K: Keep<u16>>(last: &Grid) -> Grid {
+    let (nx, ny, data) = reduce2x2::<u16, K>(last.nx as usize, last.ny as usize, &last.data, 0);
+    Grid {
+        origin: last.origin,
+        pixel_m: last.pixel_m * 2.0,
+        nx: nx as i64,
+        ny: ny as i64,
+        data,
     }
-    g
 }
 
 impl MinPyramid {
@@ -164,8 +162,8 @@ impl MinPyramid {
             if last.nx <= 1 && last.ny <= 1 || levels.len() >= 12 {
                 break;
             }
-            let g = reduce(last, u16::min);
-            let m = reduce(max_levels.last().unwrap_or(&levels[0]), u16::max);
+            let g = reduce::<Min>(last);
+            let m = reduce::<Max>(max_levels.last().unwrap_or(&levels[0]));
             levels.push(g);
             max_levels.push(m);
         }
@@ -539,7 +537,7 @@ impl HeightField {
                 if last.nx <= 1 && last.ny <= 1 {
                     break;
                 }
-                let next = reduce(last, u16::max);
+                let next = reduce::<Max>(last);
                 out.push(next);
             }
             out

@@ -31,6 +31,7 @@
 use super::erode::{pad_px, steps, Element, Step};
 use super::field::{level_for, pyramid_geometry, Grid, HeightField, MinPyramid};
 use sightline_geom::{Aabb2, DVec2};
+use sightline_raster::pyramid::{reduce2x2, Max, Min};
 use std::sync::atomic::{AtomicU16, AtomicUsize, Ordering};
 use std::sync::{Arc, OnceLock};
 
@@ -289,19 +290,10 @@ impl TiledErosion {
         let mut min = vec![base];
         let mut max: Vec<Vec<u16>> = Vec::new();
         for level in 1..=self.log {
-            let n = (s >> level) as usize;
-            let reduce = |src: &[u16], f: fn(u16, u16) -> u16| {
-                let mut out = vec![0u16; n * n];
-                for j in 0..n {
-                    for i in 0..n {
-                        let (a, b) = ((2 * j) * 2 * n + 2 * i, (2 * j + 1) * 2 * n + 2 * i);
-                        out[j * n + i] = f(f(src[a], src[a + 1]), f(src[b], src[b + 1]));
-                    }
-                }
-                out
-            };
-            let lo = reduce(&min[level - 1], u16::min);
-            let hi = reduce(max.last().unwrap_or(&min[0]), u16::max);
+            // The level below is `2n × 2n` with `n = s >> level` (s a power of two).
+            let n = 2 * (s >> level) as usize;
+            let lo = reduce2x2::<u16, Min>(n, n, &min[level - 1], 0).2;
+            let hi = reduce2x2::<u16, Max>(n, n, max.last().unwrap_or(&min[0]), 0).2;
             min.push(lo);
             max.push(hi);
         }

@@ -13,6 +13,7 @@
 //! down before the comparison, and ties count as visible.
 
 use sightline_geom::DVec2;
+use sightline_raster::pyramid::{reduce2x2, Max};
 
 /// Pieces closer than this (in pixels) count as overlapping: they come from pieces of
 /// one decomposed solid whose shared edge was computed twice.
@@ -257,16 +258,7 @@ impl DepthMap {
         while cur.0 > 1 {
             let (m, prev) = (cur.0, &cur.1);
             let h = m / 2;
-            let mut next = vec![0.0f32; h * h];
-            for j in 0..h {
-                for i in 0..h {
-                    let a = prev[(2 * j) * m + 2 * i];
-                    let b = prev[(2 * j) * m + 2 * i + 1];
-                    let c = prev[(2 * j + 1) * m + 2 * i];
-                    let d = prev[(2 * j + 1) * m + 2 * i + 1];
-                    next[j * h + i] = a.max(b).max(c).max(d);
-                }
-            }
+            let next = reduce2x2::<f32, Max>(m, m, prev, f32::INFINITY).2;
             levels.push(std::mem::replace(&mut cur, (h, next)));
         }
         levels.push(cur);
