@@ -12,7 +12,9 @@ pub enum PvsError {
     },
     #[error("not a sightline .pvs file (bad magic number)")]
     NotPvs,
-    #[error("unsupported .pvs format version {found} (this sightline reads version {supported})")]
+    #[error(
+        "unsupported .pvs format version {found} (this sightline reads versions 1 to {supported})"
+    )]
     Version { found: u16, supported: u16 },
     #[error("truncated .pvs file: {0}")]
     Truncated(String),

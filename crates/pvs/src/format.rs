@@ -19,20 +19,27 @@ use crate::delta::{choose_references, MAX_CHAIN};
 use crate::error::PvsError;
 use crate::index::Grid;
 use crate::partition::Shard;
+use crate::shapes::ShapeTable;
 use rayon::prelude::*;
 use roaring::RoaringBitmap;
 use serde::{Deserialize, Serialize};
+use sightline_core::Cell;
 use sightline_geom::ViewCell;
 
 /// First eight bytes of every `.pvs` (the `\r\n` catches text-mode mangling).
 pub const MAGIC: [u8; 8] = *b"SLPVS\0\r\n";
-/// The format version this code writes and reads.
-pub const FORMAT_VERSION: u16 = 1;
+/// The newest format version this code writes and reads: version 2 adds the SHAP
+/// section (cells that are not boxes). A file whose cells are all boxes is written as
+/// version 1, the same bytes as before; both versions are read.
+pub const FORMAT_VERSION: u16 = 2;
+/// The version of a file whose cells are all boxes.
+pub const FORMAT_VERSION_BOXES: u16 = 1;
 
 pub(crate) const TAG_HEAD: [u8; 4] = *b"HEAD";
 pub(crate) const TAG_CELL: [u8; 4] = *b"CELL";
 pub(crate) const TAG_GRID: [u8; 4] = *b"GRID";
 pub(crate) const TAG_DATA: [u8; 4] = *b"DATA";
+pub(crate) const TAG_SHAP: [u8; 4] = *b"SHAP";
 pub(crate) const CODEC_RAW: u32 = 0;
 pub(crate) const CODEC_ZSTD: u32 = 1;
 pub(crate) const DIR_ENTRY_LEN: usize = 36;
@@ -174,11 +181,38 @@ pub fn encode_with(
     sets: &[RoaringBitmap],
     opts: &EncodeOptions,
 ) -> Result<Vec<u8>, PvsError> {
-    let whole = encode_layout(header, cells, present, sets, false)?;
+    encode_shaped(header, cells, None, present, sets, opts)
+}
+
+/// [`encode_with`] for cells of any kind ([`Cell`]: boxes, convex polyhedra, voxel
+/// cells). The CELL section and the spatial index hold the cells' bounding boxes, the
+/// SHAP section their shapes (module doc of `shapes`); all boxes give the same bytes
+/// as [`encode_with`].
+pub fn encode_cells(
+    header: &Header,
+    cells: &[Cell],
+    present: &[u32],
+    sets: &[RoaringBitmap],
+    opts: &EncodeOptions,
+) -> Result<Vec<u8>, PvsError> {
+    let bounds: Vec<ViewCell> = cells.iter().map(Cell::bounds).collect();
+    let shapes = ShapeTable::of(cells);
+    encode_shaped(header, &bounds, shapes.as_ref(), present, sets, opts)
+}
+
+fn encode_shaped(
+    header: &Header,
+    cells: &[ViewCell],
+    shapes: Option<&ShapeTable>,
+    present: &[u32],
+    sets: &[RoaringBitmap],
+    opts: &EncodeOptions,
+) -> Result<Vec<u8>, PvsError> {
+    let whole = encode_layout(header, cells, shapes, present, sets, false)?;
     if !opts.delta {
         return Ok(whole);
     }
-    let delta = encode_layout(header, cells, present, sets, true)?;
+    let delta = encode_layout(header, cells, shapes, present, sets, true)?;
     Ok(if delta.len() < whole.len() {
         delta
     } else {
@@ -189,6 +223,7 @@ pub fn encode_with(
 fn encode_layout(
     header: &Header,
     cells: &[ViewCell],
+    shapes: Option<&ShapeTable>,
     present: &[u32],
     sets: &[RoaringBitmap],
     delta: bool,
@@ -318,7 +353,7 @@ fn encode_layout(
     let head_raw = postcard_bytes(header)?;
     let cell_raw = postcard_bytes(&table)?;
     let grid_raw = postcard_bytes(&grid)?;
-    let sections: [([u8; 4], u32, Vec<u8>, u64); 4] = [
+    let mut sections: Vec<([u8; 4], u32, Vec<u8>, u64)> = vec![
         (TAG_HEAD, CODEC_RAW, head_raw.clone(), head_raw.len() as u64),
         (
             TAG_CELL,
@@ -332,13 +367,22 @@ fn encode_layout(
             zstd(&grid_raw)?,
             grid_raw.len() as u64,
         ),
-        (TAG_DATA, CODEC_RAW, data, 0),
     ];
+    if let Some(t) = shapes {
+        let raw = postcard_bytes(t)?;
+        sections.push((TAG_SHAP, CODEC_ZSTD, zstd(&raw)?, raw.len() as u64));
+    }
+    sections.push((TAG_DATA, CODEC_RAW, data, 0));
+    let version = if shapes.is_some() {
+        FORMAT_VERSION
+    } else {
+        FORMAT_VERSION_BOXES
+    };
     let preamble_len = PREAMBLE_FIXED + DIR_ENTRY_LEN * sections.len() + 4;
     let mut out =
         Vec::with_capacity(preamble_len + sections.iter().map(|s| s.2.len()).sum::<usize>());
     out.extend_from_slice(&MAGIC);
-    out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+    out.extend_from_slice(&version.to_le_bytes());
     out.extend_from_slice(&(sections.len() as u16).to_le_bytes());
     let mut offset = preamble_len as u64;
     for (tag, codec, bytes, raw_len) in &sections {
@@ -395,7 +439,7 @@ pub(crate) fn parse_preamble(
         )));
     }
     let version = u16::from_le_bytes([head[8], head[9]]);
-    if version != FORMAT_VERSION {
+    if !(FORMAT_VERSION_BOXES..=FORMAT_VERSION).contains(&version) {
         return Err(PvsError::Version {
             found: version,
             supported: FORMAT_VERSION,

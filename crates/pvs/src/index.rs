@@ -87,6 +87,17 @@ impl Grid {
 
     /// The lowest-index cell whose closed box contains `p`.
     pub fn locate(&self, cells: &[ViewCell], p: DVec3) -> Option<usize> {
+        self.locate_where(cells, p, |_| true)
+    }
+
+    /// The lowest-index cell whose closed box contains `p` and for which `keep` holds
+    /// (a cell's shape inside its box).
+    pub fn locate_where(
+        &self,
+        cells: &[ViewCell],
+        p: DVec3,
+        keep: impl Fn(usize) -> bool,
+    ) -> Option<usize> {
         if !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()) {
             return None;
         }
@@ -96,7 +107,7 @@ impl Grid {
         self.items[s..e]
             .iter()
             .map(|&i| i as usize)
-            .find(|&i| cells[i].contains(p))
+            .find(|&i| cells[i].contains(p) && keep(i))
     }
 
     /// Check a decoded grid against the cell count (untrusted input).

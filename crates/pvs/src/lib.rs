@@ -41,13 +41,14 @@ pub mod index;
 pub mod journal;
 mod partition;
 pub mod query;
+mod shapes;
 pub mod shard;
 mod stored;
 
 pub use build::{build, BuildOptions, BuildStats};
 pub use crc::{crc32, Crc32};
 pub use error::PvsError;
-pub use format::{Header, FORMAT_VERSION, MAGIC};
+pub use format::{Header, FORMAT_VERSION, FORMAT_VERSION_BOXES, MAGIC};
 pub use partition::{Shard, SHARD_ENV};
 pub use query::PvsFile;
 pub use shard::merge;

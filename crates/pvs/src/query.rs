@@ -6,10 +6,12 @@ use crate::crc::crc32;
 use crate::error::PvsError;
 use crate::format::{
     from_postcard, parse_preamble, section_payload, CellTable, Header, Section, CHAIN_LIMIT,
-    TAG_CELL, TAG_DATA, TAG_GRID, TAG_HEAD,
+    TAG_CELL, TAG_DATA, TAG_GRID, TAG_HEAD, TAG_SHAP,
 };
 use crate::index::Grid;
+use crate::shapes::ShapeTable;
 use roaring::RoaringBitmap;
+use sightline_core::Cell;
 use sightline_geom::{DVec3, ViewCell};
 use sightline_scene::Scene;
 use std::fs::File;
@@ -76,6 +78,7 @@ pub struct PvsFile {
     cells: Vec<ViewCell>,
     table: CellTable,
     grid: Grid,
+    shapes: Option<ShapeTable>,
     data: Section,
     source: Source,
     cache: Mutex<Vec<(u32, Arc<Vec<u8>>)>>,
@@ -137,9 +140,16 @@ impl PvsFile {
         let header: Header = from_postcard(&load(TAG_HEAD)?, "HEAD")?;
         let table: CellTable = from_postcard(&load(TAG_CELL)?, "CELL")?;
         let grid: Grid = from_postcard(&load(TAG_GRID)?, "GRID")?;
+        let shapes: Option<ShapeTable> = match sections.iter().any(|s| s.tag == TAG_SHAP) {
+            true => Some(from_postcard(&load(TAG_SHAP)?, "SHAP")?),
+            false => None,
+        };
         let data = find(TAG_DATA)?;
         table.validate(&header, data.len)?;
         grid.validate(header.cell_count as usize)?;
+        if let Some(t) = &shapes {
+            t.validate(header.cell_count as usize)?;
+        }
         if let Some(s) = header.shard {
             s.validate()?;
         }
@@ -149,6 +159,7 @@ impl PvsFile {
             cells,
             table,
             grid,
+            shapes,
             data,
             source,
             cache: Mutex::new(Vec::new()),
@@ -159,9 +170,24 @@ impl PvsFile {
         &self.header
     }
 
-    /// All cells of the build (a shard stores the sets of only some of them).
+    /// All cells of the build (a shard stores the sets of only some of them), as their
+    /// bounding boxes ([`PvsFile::cell`] gives a cell's own shape).
     pub fn cells(&self) -> &[ViewCell] {
         &self.cells
+    }
+
+    /// Cell `i` with its shape (a box, a convex polyhedron, voxel boxes).
+    pub fn cell(&self, i: usize) -> Option<Cell> {
+        let bounds = *self.cells.get(i)?;
+        Some(match &self.shapes {
+            Some(t) => t.cell(i, bounds),
+            None => Cell::Box(bounds),
+        })
+    }
+
+    /// Every cell with its shape.
+    pub fn shaped_cells(&self) -> Vec<Cell> {
+        (0..self.cells.len()).filter_map(|i| self.cell(i)).collect()
     }
 
     /// Indices of the cells whose sets this file stores, ascending.
@@ -191,9 +217,15 @@ impl PvsFile {
         Ok(())
     }
 
-    /// Index of the cell containing `p` (closed boxes; the lowest index on shared faces).
+    /// Index of the cell containing `p` (closed cells; the lowest index on shared
+    /// faces): the spatial index finds the cells whose box holds `p`, the shape decides.
     pub fn locate(&self, p: DVec3) -> Option<usize> {
-        self.grid.locate(&self.cells, p)
+        match &self.shapes {
+            None => self.grid.locate(&self.cells, p),
+            Some(_) => self.grid.locate_where(&self.cells, p, |i| {
+                self.cell(i).is_some_and(|c| c.contains(p))
+            }),
+        }
     }
 
     /// The cell containing `p` and its sorted PVS; `None` if no cell contains `p`.

@@ -7,7 +7,7 @@
 //! the sets of its own cells only.
 
 use crate::error::PvsError;
-use crate::format::{encode_bitmaps, Header};
+use crate::format::{encode_cells, EncodeOptions, Header};
 use crate::query::PvsFile;
 use roaring::RoaringBitmap;
 
@@ -61,5 +61,11 @@ pub fn merge(inputs: &[(String, PvsFile)]) -> Result<Vec<u8>, PvsError> {
         ..h0.clone()
     };
     let present: Vec<u32> = (0..n as u32).collect();
-    encode_bitmaps(&header, first.cells(), &present, &sets)
+    encode_cells(
+        &header,
+        &first.shaped_cells(),
+        &present,
+        &sets,
+        &EncodeOptions::default(),
+    )
 }
