@@ -927,13 +927,24 @@ impl VisibilityMethod for DualRay {
         self.name
     }
 
+    /// The resolution, and the switches that change the PVS when they differ from their
+    /// defaults (the seed rays do not change it), so a default build's header is as it
+    /// always was.
     fn params(&self) -> Vec<(String, String)> {
-        match self.planarity {
+        let mut p = match self.planarity {
             Planarity::Discrete { resolution_px } => {
                 vec![("resolution".to_string(), resolution_px.to_string())]
             }
             Planarity::Exact => Vec::new(),
+        };
+        let d = sightline_core::DualRayOptions::default();
+        if self.use_vo != d.virtual_occluders {
+            p.push(("virtual_occluders".into(), self.use_vo.to_string()));
         }
+        if self.use_hidden != d.hidden_boxes {
+            p.push(("hidden_boxes".into(), self.use_hidden.to_string()));
+        }
+        p
     }
 
     fn pvs(&self, cell: &ViewCell) -> Result<Vec<u32>, MethodError> {
