@@ -29,7 +29,7 @@ use std::time::{Duration, Instant};
 
 /// Cells each method is run on and measured against the ground truth (near the middle
 /// of the city: cells at its edge see mostly empty ground).
-const DEMO_CELLS: usize = 3;
+const DEMO_CELLS: usize = 2;
 /// Time budget per method: stop after this once at least one cell is done.
 const METHOD_BUDGET: Duration = Duration::from_secs(3);
 /// The method of the `.pvs` and of the map: the fastest conservative one.
