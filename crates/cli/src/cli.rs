@@ -39,7 +39,11 @@ pub struct SceneArg {
 /// The methods `--method` takes, one line each, from the registry
 /// ([`sightline_methods::Method`]): shown after the help of every command with `--method`.
 pub fn methods_help() -> String {
-    let width = Method::ALL.iter().map(|m| m.name().len()).max().unwrap_or(0);
+    let width = Method::ALL
+        .iter()
+        .map(|m| m.name().len())
+        .max()
+        .unwrap_or(0);
     let mut s = String::from("Methods (--method):\n");
     for m in Method::ALL {
         s.push_str(&format!("  {:width$}  {}\n", m.name(), m.summary()));

@@ -209,7 +209,11 @@ fn cells_rejects_bad_arguments_with_one_line_errors() {
 
 #[test]
 fn help_lists_every_method_with_its_summary() {
-    for args in [&["--help"][..], &["pvs", "--help"][..], &["build", "--help"][..]] {
+    for args in [
+        &["--help"][..],
+        &["pvs", "--help"][..],
+        &["build", "--help"][..],
+    ] {
         let o = sightline(args);
         assert!(o.status.success(), "{args:?}");
         let help = String::from_utf8_lossy(&o.stdout);

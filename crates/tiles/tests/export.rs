@@ -121,7 +121,10 @@ fn glb_carries_feature_ids_and_object_ids() {
 /// every buffer view inside its buffer.
 fn assert_valid_glb(glb: &[u8]) -> serde_json::Value {
     assert_eq!(&glb[0..4], b"glTF");
-    assert_eq!(u32::from_le_bytes(glb[8..12].try_into().unwrap()) as usize, glb.len());
+    assert_eq!(
+        u32::from_le_bytes(glb[8..12].try_into().unwrap()) as usize,
+        glb.len()
+    );
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(glb).unwrap();
     gltf::import_buffers(&document, None, blob).unwrap();
     let json_len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
@@ -129,7 +132,10 @@ fn assert_valid_glb(glb: &[u8]) -> serde_json::Value {
     let empty = vec![];
     let field = |k: &str| json[k].as_array().unwrap_or(&empty).clone();
     for v in field("bufferViews") {
-        assert!(v["byteLength"].as_u64().unwrap() >= 1, "empty buffer view {v}");
+        assert!(
+            v["byteLength"].as_u64().unwrap() >= 1,
+            "empty buffer view {v}"
+        );
     }
     for a in field("accessors") {
         assert!(a["count"].as_u64().unwrap() >= 1, "empty accessor {a}");
@@ -154,7 +160,10 @@ fn objects_without_triangles_give_a_valid_glb() {
         json["extensions"]["EXT_structural_metadata"]["propertyTables"][0]["count"],
         1
     );
-    assert_eq!(json["extensionsUsed"], serde_json::json!(["EXT_structural_metadata"]));
+    assert_eq!(
+        json["extensionsUsed"],
+        serde_json::json!(["EXT_structural_metadata"])
+    );
     // Beside an object with triangles: one mesh, both rows.
     let json = assert_valid_glb(&tile_glb(&scene, &[0, 1], DVec3::ZERO));
     assert_eq!(json["meshes"].as_array().unwrap().len(), 1);

@@ -115,8 +115,7 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         .par_iter()
         .map(|c| ts.ground_truth(c, &TruthOptions::default()))
         .collect();
-    let truth_ms =
-        1e3 * truths.iter().map(|t| t.seconds).sum::<f64>() / truths.len().max(1) as f64;
+    let truth_ms = 1e3 * truths.iter().map(|t| t.seconds).sum::<f64>() / truths.len().max(1) as f64;
     println!(
         "truth   {} cells near the middle in {:.1} s ({truth_ms:.0} ms/cell; 128 viewpoints × 6 faces × 1024², targeted rays)",
         picked.len(),
