@@ -37,9 +37,9 @@
 //! never looser than `erosion-cell`, which erodes by the same element. Against
 //! `erosion` (segment erosion, shrunk occludees) it depends on the occluders: an erosion
 //! by the whole cell empties rows of buildings thinner than the cell that an erosion by
-//! one side keeps, which the deeper quarters make up for — `erosion-rays` refines to
-//! [`super::RAYS_MAX_DEPTH`] levels, one more than the other erosion methods, as its
-//! samples get denser with every level. The measurements behind these choices are in
+//! one side keeps, which the deeper quarters make up for: `erosion-rays` refines to
+//! [`super::RAYS_MAX_DEPTH`] levels (sub-cells down to [`super::RAYS_MIN_SUBCELL_M`]),
+//! its samples denser with every level. The measurements behind these choices are in
 //! `docs/methods/erosion.md`.
 //!
 
