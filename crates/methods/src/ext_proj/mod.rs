@@ -12,7 +12,7 @@
 //! 1. occluder selection by solid angle through a precomputed relevance tree
 //!    (`occluders`); occluders are the fused inner prisms of the objects;
 //! 2. for each of the six directions of the cell, a projection plane placed by the
-//!    filled-pixels heuristic and extended by 1.5 (`planes`);
+//!    filled-pixels heuristic and extended by [`DEFAULT_EXTENSION`] (`planes`);
 //! 3. extended projections of convex occluder pieces (intersection of the views from
 //!    the cell's vertices) and slices of the pieces cut by the plane (`projection`),
 //!    drawn with union-aware inner coverage into an extended depth map and its
