@@ -1,37 +1,41 @@
 #!/usr/bin/env python3
-"""Copy a `sightline bench` report into README.md's Results section.
+"""Copy the headline table of a `sightline bench` report into README.md's Results section.
 
     python3 scripts/readme_results.py [docs/bench/quick/README.md] [README.md]
 
 Replaces the lines between `<!-- results:begin -->` and `<!-- results:end -->` with the
-report's machine line, every table and the plots listed in PLOTS (image paths made
-relative to the README), so no figure in the README is typed by hand.
+report's machine line and one table: all methods on the same street cells of SCENE
+(section SECTION), so no figure in the README is typed by hand. The whole report, with
+every table and plot, stays in docs/bench/.
 """
 import os
 import re
 import sys
 
-PLOTS = {"fig9-lyon1_bdtopo.png", "table1-time.png", "scaling.png"}
+SECTION = "## All methods on the same cells"
+SCENE = "**lyon1_bdtopo**"
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
 
 
-def convert(report_path: str, readme_dir: str) -> str:
-    rel = os.path.relpath(os.path.dirname(os.path.abspath(report_path)), readme_dir)
-    out = []
+def convert(report_path: str) -> str:
     with open(report_path, encoding="utf-8") as f:
         lines = f.read().splitlines()
-    for line in lines[1:]:  # the report's own title is replaced by the README's heading
-        m = re.match(r"!\[(.*)\]\((.*)\)$", line)
-        if m:
-            if m.group(2) in PLOTS:
-                out.append(f"![{m.group(1)}]({rel}/{m.group(2)})")
-            continue
-        if line.startswith("## "):
-            line = "#" + line  # one level down: the README's Results is a `##`
-        out.append(line)
-    text = "\n".join(out).strip()
-    text = re.sub(r"\n{3,}", "\n\n", text)
-    return text
+    machine = next((l for l in lines if l.startswith("Machine:")), None)
+    if machine is None:
+        raise SystemExit(f"error: {report_path} has no Machine: line")
+    try:
+        i = next(k for k, l in enumerate(lines) if l.startswith(SECTION))
+        j = next(k for k in range(i + 1, len(lines)) if lines[k].startswith(SCENE))
+    except StopIteration:
+        raise SystemExit(f"error: {report_path} has no {SECTION} table for {SCENE}")
+    out = [machine, "", lines[j], ""]
+    k = j + 1
+    while k < len(lines) and not lines[k].startswith("|"):
+        k += 1
+    while k < len(lines) and lines[k].startswith("|"):
+        out.append(lines[k])
+        k += 1
+    return "\n".join(out)
 
 
 def main() -> int:
@@ -44,7 +48,7 @@ def main() -> int:
         return 2
     head, rest = text.split(BEGIN, 1)
     _, tail = rest.split(END, 1)
-    body = convert(report, os.path.dirname(os.path.abspath(readme)))
+    body = convert(report)
     new = f"{head}{BEGIN}\n{body}\n{END}{tail}"
     tmp = readme + ".tmp"
     with open(tmp, "w", encoding="utf-8") as f:

@@ -2,10 +2,11 @@
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use sightline_geom::ViewCell;
+use sightline_methods::Method;
 use std::path::PathBuf;
 
 #[derive(Parser, Debug)]
-#[command(name = "sightline", version, about = "Conservative potentially visible sets for cities", long_about = None)]
+#[command(name = "sightline", version, about = "Conservative potentially visible sets for cities", long_about = None, after_help = methods_help())]
 pub struct Cli {
     /// Hide progress bars.
     #[arg(long, global = true)]
@@ -33,6 +34,21 @@ pub struct SceneArg {
     /// it is skipped with a counted `skipped-feature` warning naming it).
     #[arg(long)]
     pub strict: bool,
+}
+
+/// The methods `--method` takes, one line each, from the registry
+/// ([`sightline_methods::Method`]): shown after the help of every command with `--method`.
+pub fn methods_help() -> String {
+    let width = Method::ALL
+        .iter()
+        .map(|m| m.name().len())
+        .max()
+        .unwrap_or(0);
+    let mut s = String::from("Methods (--method):\n");
+    for m in Method::ALL {
+        s.push_str(&format!("  {:width$}  {}\n", m.name(), m.summary()));
+    }
+    s
 }
 
 fn parse_cell(s: &str) -> Result<ViewCell, String> {
@@ -107,12 +123,14 @@ pub enum Command {
         out: PathBuf,
     },
     /// PVS of one viewcell with one method.
+    #[command(after_help = methods_help())]
     Pvs {
         #[command(flatten)]
         scene: SceneArg,
         /// The viewcell `X0,Y0,Z0,X1,Y1,Z1`.
         #[arg(long, value_parser = parse_cell, allow_hyphen_values = true)]
         cell: ViewCell,
+        /// The method (listed below).
         #[arg(long, default_value = "erosion")]
         method: String,
         #[arg(long)]
@@ -140,11 +158,13 @@ pub enum Command {
         json: bool,
     },
     /// Compute the PVS of every cell of a cells.json into a .pvs file.
+    #[command(after_help = methods_help())]
     Build {
         #[command(flatten)]
         scene: SceneArg,
         #[arg(long)]
         cells: PathBuf,
+        /// The method (listed below).
         #[arg(long, default_value = "erosion")]
         method: String,
         #[arg(long)]
@@ -181,11 +201,13 @@ pub enum Command {
         json: bool,
     },
     /// Recompute ground truth on some cells and report missed/over of a method or a .pvs.
+    #[command(after_help = methods_help())]
     Check {
         #[command(flatten)]
         scene: SceneArg,
         /// A .pvs file to check (otherwise --method is run on --cells).
         pvs: Option<PathBuf>,
+        /// The method (listed below).
         #[arg(long)]
         method: Option<String>,
         /// A cells.json (with --method), or a number of cells to sample from the .pvs.
@@ -203,11 +225,13 @@ pub enum Command {
         json: bool,
     },
     /// Top-down PNG of a scene with a cell's PVS classified against the ground truth.
+    #[command(after_help = methods_help())]
     Map {
         #[command(flatten)]
         scene: SceneArg,
         #[arg(long, value_parser = parse_cell, allow_hyphen_values = true)]
         cell: ViewCell,
+        /// The method (listed below).
         #[arg(long)]
         method: Option<String>,
         #[arg(long)]
@@ -216,19 +240,21 @@ pub enum Command {
         out: PathBuf,
     },
     /// Reproduce the papers' experiments; write a Markdown report with plots.
+    #[command(after_help = methods_help())]
     Bench {
         #[arg(long, default_value = "quick")]
         suite: String,
         /// Extra real scenes to include.
         #[arg(long)]
         scene: Vec<PathBuf>,
-        /// Comma-separated method names (default: all conservative methods).
+        /// Comma-separated method names (default: all conservative methods; listed below).
         #[arg(long)]
         methods: Option<String>,
         #[arg(short, long, default_value = "report")]
         out: PathBuf,
     },
     /// Serve a scene (and optionally a .pvs) to walkthrough clients.
+    #[command(after_help = methods_help())]
     Serve {
         #[command(flatten)]
         scene: SceneArg,
@@ -237,6 +263,7 @@ pub enum Command {
         addr: String,
         #[arg(long, default_value_t = 100.0)]
         cell_size: f64,
+        /// The on-line method (listed below).
         #[arg(long, default_value = "dual-ray")]
         method: String,
         /// Require this token (`?token=` or `Authorization: Bearer`).

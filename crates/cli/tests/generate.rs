@@ -208,23 +208,68 @@ fn cells_rejects_bad_arguments_with_one_line_errors() {
 }
 
 #[test]
+fn help_lists_every_method_with_its_summary() {
+    for args in [
+        &["--help"][..],
+        &["pvs", "--help"][..],
+        &["build", "--help"][..],
+    ] {
+        let o = sightline(args);
+        assert!(o.status.success(), "{args:?}");
+        let help = String::from_utf8_lossy(&o.stdout);
+        for m in sightline_methods::Method::ALL {
+            assert!(
+                help.lines()
+                    .any(|l| l.trim_start().starts_with(m.name()) && l.contains(m.summary())),
+                "{args:?}: {} missing from\n{help}",
+                m.name()
+            );
+        }
+    }
+}
+
+#[test]
 fn demo_runs_end_to_end() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("demo");
     let o = sightline(&["demo", "-o", path(&out), "--quiet"]);
     assert!(o.status.success(), "{}", stderr(&o));
-    for f in ["city.geojson", "cells.json", "summary.md", "summary.json"] {
+    for f in [
+        "city.geojson",
+        "cells.json",
+        "summary.md",
+        "summary.json",
+        "city.pvs",
+        "map.png",
+    ] {
         assert!(out.join(f).exists(), "{f} missing");
     }
+    let png = std::fs::read(out.join("map.png")).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("sightline serve"), "{stdout}");
     let v: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
     let methods = v["methods"].as_array().unwrap();
     let all = methods.iter().find(|m| m["method"] == "all").unwrap();
     assert_eq!(
         v["objects"].as_u64().unwrap() as usize,
-        all["pvs_max"].as_u64().unwrap() as usize
+        all["pvs_median"].as_u64().unwrap() as usize
     );
     assert_eq!(methods.len(), sightline_methods::METHOD_NAMES.len());
+    // Measured against the ground truth, not claimed: no conservative method misses.
+    for m in methods {
+        assert!(m["status"].as_str().unwrap().starts_with("ok"), "{m}");
+        if m["conservative"] == true {
+            assert_eq!(m["missed"], 0, "{m}");
+            assert!(m["over_median"].as_f64().unwrap() >= 1.0, "{m}");
+        }
+    }
+    // The `.pvs` is readable and holds the grid.
+    let cells: Vec<serde_json::Value> =
+        serde_json::from_slice(&std::fs::read(out.join("cells.json")).unwrap()).unwrap();
+    let f = sightline_pvs::PvsFile::open(out.join("city.pvs")).unwrap();
+    assert_eq!(f.cells().len(), cells.len());
 }
 
 #[test]

@@ -40,6 +40,53 @@ pub fn cells_to_cover(lo: f64, hi: f64, size: f64) -> f64 {
     ((hi - lo) / size).ceil().max(1.0)
 }
 
+/// The square cells of side `size_m` covering a rectangle: the one numbering of cells
+/// shared by `sightline cells` and the walkthrough server's on-line grid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cover {
+    /// Minimum corner of cell 0: the rectangle's minimum corner rounded down to a
+    /// multiple of `size_m`, so cells sit on round coordinates whatever the scene.
+    pub origin: DVec2,
+    pub size_m: f64,
+    /// Columns and rows, as `f64` so that a caller can refuse a grid too large before
+    /// converting ([`Cover::total`]).
+    pub nx: f64,
+    pub ny: f64,
+}
+
+impl Cover {
+    /// Number of cells (NaN or huge for a degenerate input: callers compare it to their
+    /// limit before [`Cover::grid`]).
+    pub fn total(&self) -> f64 {
+        self.nx * self.ny
+    }
+
+    /// The cells as a [`UniformGrid`] (counts saturated to `u32`).
+    pub fn grid(&self) -> UniformGrid {
+        UniformGrid::square(self.origin, self.size_m, self.nx as u32, self.ny as u32)
+    }
+}
+
+/// Cover `bounds` with square cells of side `size_m` (a positive finite number, checked
+/// by the caller), row by row from `bounds.min` rounded down to a multiple of `size_m`;
+/// the last row and column may stick out.
+///
+/// ```
+/// use sightline_geom::{grid, Aabb2, DVec2};
+/// let c = grid::cover(Aabb2::new(DVec2::new(-50.0, 12.0), DVec2::new(250.0, 180.0)), 100.0);
+/// assert_eq!(c.origin, DVec2::new(-100.0, 0.0));
+/// assert_eq!((c.nx, c.ny), (4.0, 2.0));
+/// ```
+pub fn cover(bounds: Aabb2, size_m: f64) -> Cover {
+    let origin = (bounds.min / size_m).floor() * size_m;
+    Cover {
+        origin,
+        size_m,
+        nx: cells_to_cover(origin.x, bounds.max.x, size_m),
+        ny: cells_to_cover(origin.y, bounds.max.y, size_m),
+    }
+}
+
 impl UniformGrid {
     /// Square cells of side `size_m`.
     pub fn square(origin: DVec2, size_m: f64, nx: u32, ny: u32) -> Self {

@@ -21,8 +21,7 @@ use std::sync::{Arc, Mutex};
 
 /// Decoded blocks kept for the next queries, oldest dropped first, up to this many
 /// decoded bytes: a walk stays in a neighbourhood, and a server answering clients all
-/// over a city of 10,000 cells keeps every block of its file (≈ 35 MB decoded for the
-/// 150k metropolis).
+/// over a city of 10,000 cells keeps every block of its file.
 const BLOCK_CACHE_BYTES: usize = 64 << 20;
 
 enum Source {

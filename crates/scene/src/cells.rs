@@ -25,7 +25,7 @@
 use crate::index::SceneIndex;
 use crate::{Prism, Scene};
 use rayon::prelude::*;
-use sightline_geom::{boolean, grid, Aabb2, Aabb3, DVec2, Polygon, UniformGrid, ViewCell};
+use sightline_geom::{boolean, grid, Aabb2, Aabb3, DVec2, Polygon, ViewCell};
 
 /// Grids larger than this are refused (they would not fit a `.pvs` anyway).
 pub const MAX_CELLS: u64 = 20_000_000;
@@ -43,26 +43,20 @@ pub enum CellError {
     EmptyScene,
 }
 
-/// Columns and rows of the grid of side `size_m` over the scene's bounding rectangle.
+/// Columns and rows of the grid of side `size_m` over the scene's bounding rectangle
+/// ([`grid::cover`], the numbering the walkthrough server shares).
 pub fn grid_shape(scene: &Scene, size_m: f64) -> (u64, u64) {
     let b = scene.bounds.xy();
     if b.is_empty() || size_m.is_nan() || size_m <= 0.0 {
         return (0, 0);
     }
-    let o = grid_origin(b, size_m);
-    let count = |lo: f64, hi: f64| grid::cells_to_cover(lo, hi, size_m) as u64;
-    (count(o.x, b.max.x), count(o.y, b.max.y))
+    let c = grid::cover(b, size_m);
+    (c.nx as u64, c.ny as u64)
 }
 
-/// The grid's minimum corner: the scene's minimum corner rounded down to a multiple of
-/// the cell size, so cells sit on round coordinates.
-fn grid_origin(b: Aabb2, size_m: f64) -> DVec2 {
-    (b.min / size_m).floor() * size_m
-}
-
-/// Cells of side `size_m` covering the scene's bounding rectangle (row by row from
-/// its minimum corner rounded down to a multiple of `size_m`; the first and last rows
-/// and columns may stick out), at heights `z0..z1`,
+/// Cells of side `size_m` covering the scene's bounding rectangle ([`grid::cover`]: row
+/// by row from its minimum corner rounded down to a multiple of `size_m`; the first and
+/// last rows and columns may stick out), at heights `z0..z1`,
 /// keeping those whose free space is non-empty.
 pub fn grid_cells(
     scene: &Scene,
@@ -91,13 +85,12 @@ pub fn grid_cells_clipped(
     if scene.is_empty() || scene.bounds.is_empty() {
         return Err(CellError::EmptyScene);
     }
-    let b = scene.bounds.xy();
     let (nx, ny) = grid_shape(scene, size_m);
     let total = nx.saturating_mul(ny);
     if total > MAX_CELLS {
         return Err(CellError::TooMany(total));
     }
-    let grid = UniformGrid::square(grid_origin(b, size_m), size_m, nx as u32, ny as u32);
+    let grid = grid::cover(scene.bounds.xy(), size_m).grid();
     let clip_bbox = clip.map(|c| c.iter().fold(Aabb2::EMPTY, |a, p| a.union(p.bbox())));
     let free = FreeSpace::new(scene);
     let cells: Vec<ViewCell> = (0..total)

@@ -18,7 +18,7 @@
 //!   positions     f32 × 3V   x, y, z in metres relative to the scene origin
 //!   indices       u32 × I    counter-clockwise seen from outside
 //! ```
-//! The scene origin is `/api/scene`'s `origin` (the scene's minimum x, y and z = 0):
+//! The scene origin is `/api/scene`'s `origin` (the cell grid's origin and z = 0):
 //! relative coordinates keep `f32` at millimetre precision across a 10 km city, where
 //! absolute projected coordinates (10⁵–10⁶ m) would not.
 //!

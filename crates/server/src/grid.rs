@@ -4,8 +4,10 @@
 //! into square viewcells of 100 × 100 m, 2 m high, and keeps the client supplied with the
 //! PVS of the cell it stands in and of the adjacent ones. [`CellGrid`] is that partition:
 //! square cells of `cell_size_m` covering the scene's bounding rectangle, at eye height
-//! `z_range_m` (default 1.5–2.0 m, as `sightline cells`), numbered as every grid of
-//! sightline ([`UniformGrid`]): a cell's id is `iy * nx + ix`.
+//! `z_range_m` (default 1.5–2.0 m, as `sightline cells`), laid out and numbered as
+//! `sightline cells` lays them out ([`grid::cover`]: from the scene's minimum corner
+//! rounded down to a multiple of the cell size) and as every grid of sightline
+//! ([`UniformGrid`]): a cell's id is `iy * nx + ix`.
 
 use serde::Serialize;
 use sightline_geom::{grid, Aabb3, DVec2, DVec3, UniformGrid, ViewCell};
@@ -22,7 +24,8 @@ pub const MAX_CELLS: u64 = 1 << 26;
 /// Square viewcells of `cell_size_m` covering `[origin, origin + (nx, ny) * size]`.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct CellGrid {
-    /// South-west corner of cell 0 (the scene's minimum x, y).
+    /// South-west corner of cell 0 (the scene's minimum x, y rounded down to a multiple
+    /// of the cell size, as `sightline cells`: [`grid::cover`]).
     pub origin: [f64; 2],
     pub cell_size_m: f64,
     pub nx: u32,
@@ -54,7 +57,8 @@ pub enum PointError {
 }
 
 impl CellGrid {
-    /// Cover `bounds` (a scene's bounding box) with cells of `cell_size_m`.
+    /// Cover `bounds` (a scene's bounding box) with cells of `cell_size_m`, numbered as
+    /// `sightline cells` numbers them ([`grid::cover`]).
     pub fn cover(bounds: &Aabb3, cell_size_m: f64) -> Result<Self, GridError> {
         if !(cell_size_m.is_finite() && cell_size_m > 0.0) {
             return Err(GridError::BadSize(cell_size_m));
@@ -62,18 +66,17 @@ impl CellGrid {
         if bounds.is_empty() {
             return Err(GridError::EmptyScene);
         }
-        let nx = grid::cells_to_cover(bounds.min.x, bounds.max.x, cell_size_m);
-        let ny = grid::cells_to_cover(bounds.min.y, bounds.max.y, cell_size_m);
-        let total = nx * ny;
+        let c = grid::cover(bounds.xy(), cell_size_m);
+        let total = c.total();
         // Written so that a NaN total is rejected too.
         if total.is_nan() || total > MAX_CELLS as f64 {
             return Err(GridError::TooMany(total as u64, cell_size_m));
         }
         Ok(CellGrid {
-            origin: [bounds.min.x, bounds.min.y],
+            origin: c.origin.to_array(),
             cell_size_m,
-            nx: nx as u32,
-            ny: ny as u32,
+            nx: c.nx as u32,
+            ny: c.ny as u32,
             z_range_m: [EYE_Z_M.0, EYE_Z_M.1],
             top_m: bounds.max.z.max(EYE_Z_M.1),
         })
@@ -219,20 +222,20 @@ mod tests {
 
     #[test]
     fn next_cell_is_across_the_side_the_ray_leaves_through() {
-        let g = grid(); // 3 × 2 cells of 100 m from (-50, 0)
-        let p = DVec2::new(0.0, 50.0); // cell 0, centre
+        let g = grid(); // 4 × 2 cells of 100 m from (-100, 0)
+        let p = DVec2::new(-50.0, 50.0); // cell 0, centre
         assert_eq!(g.next_cell(p, DVec2::new(1.0, 0.0)), Some(1));
-        assert_eq!(g.next_cell(p, DVec2::new(0.0, 1.0)), Some(3));
-        assert_eq!(g.next_cell(p, DVec2::new(1.0, 1.0)), Some(4)); // through the corner
+        assert_eq!(g.next_cell(p, DVec2::new(0.0, 1.0)), Some(4));
+        assert_eq!(g.next_cell(p, DVec2::new(1.0, 1.0)), Some(5)); // through the corner
         assert_eq!(g.next_cell(p, DVec2::new(-1.0, 0.0)), None); // leaves the grid
         assert_eq!(g.next_cell(p, DVec2::ZERO), None);
         // Near the top side, heading mostly east: the top side comes first.
         assert_eq!(
-            g.next_cell(DVec2::new(0.0, 95.0), DVec2::new(1.0, 0.2)),
-            Some(3)
+            g.next_cell(DVec2::new(-50.0, 95.0), DVec2::new(1.0, 0.2)),
+            Some(4)
         );
         assert_eq!(
-            g.next_cell(DVec2::new(0.0, 5.0), DVec2::new(1.0, 0.2)),
+            g.next_cell(DVec2::new(-50.0, 5.0), DVec2::new(1.0, 0.2)),
             Some(1)
         );
         assert_eq!(
@@ -249,24 +252,26 @@ mod tests {
     #[test]
     fn covers_the_scene_rectangle() {
         let g = grid();
-        assert_eq!((g.nx, g.ny), (3, 2));
+        // From (-50, 0) rounded down to a multiple of 100 m: (-100, 0), as `cells`.
+        assert_eq!(g.origin, [-100.0, 0.0]);
+        assert_eq!((g.nx, g.ny), (4, 2));
         assert_eq!(g.top_m, 30.0);
         assert_eq!(
-            g.cell(4).unwrap().to_array(),
-            [50.0, 100.0, 1.5, 150.0, 200.0, 2.0]
+            g.cell(5).unwrap().to_array(),
+            [0.0, 100.0, 1.5, 100.0, 200.0, 2.0]
         );
-        assert!(g.cell(6).is_none());
+        assert!(g.cell(8).is_none());
     }
 
     #[test]
     fn locates_points_and_rejects_outside_ones() {
         let g = grid();
         assert_eq!(g.locate(DVec3::new(-50.0, 0.0, 1.7)), Ok(0));
-        assert_eq!(g.locate(DVec3::new(60.0, 150.0, 1.7)), Ok(4));
+        assert_eq!(g.locate(DVec3::new(60.0, 150.0, 1.7)), Ok(5));
         // The far border belongs to the last cell.
-        assert_eq!(g.locate(DVec3::new(250.0, 200.0, 0.0)), Ok(5));
+        assert_eq!(g.locate(DVec3::new(300.0, 200.0, 0.0)), Ok(7));
         assert!(matches!(
-            g.locate(DVec3::new(-50.1, 0.0, 1.7)),
+            g.locate(DVec3::new(-100.1, 0.0, 1.7)),
             Err(PointError::Outside(..))
         ));
         assert!(matches!(

@@ -92,15 +92,24 @@ pub fn tile_glb(scene: &Scene, objects: &[u32], centre: DVec3) -> Vec<u8> {
         (lo, hi) = ([0.0; 3], [0.0; 3]);
     }
 
+    // glTF forbids empty buffer views, accessors and buffers (`byteLength` and `count`
+    // are at least 1): objects without triangles (an empty flat object, a mesh whose
+    // faces were all degenerate) give a tile without a mesh, and a tile without objects
+    // one without metadata either.
+    let has_mesh = !indices.is_empty();
+    let has_table = !objects.is_empty();
     let mut bin = Bin::default();
-    let pos_view = bin.view(&le_f32(positions.iter().flatten()), Some(ARRAY_BUFFER));
-    // Vertex attributes must be 4-byte aligned per element: a u16 id would need
-    // padding to 4 bytes anyway, and f32 holds every id below 2^24 exactly.
-    let fids: Vec<f32> = feature_ids.iter().map(|&f| f as f32).collect();
-    let (fid_bytes, fid_type) = (le_f32(fids.iter()), FLOAT);
-    let fid_view = bin.view(&fid_bytes, Some(ARRAY_BUFFER));
-    let idx_view = bin.view(&le_u32(indices.iter()), Some(ELEMENT_ARRAY_BUFFER));
-    let object_view = bin.view(&le_u32(objects.iter()), None);
+    let mut mesh_views = None;
+    if has_mesh {
+        let pos_view = bin.view(&le_f32(positions.iter().flatten()), Some(ARRAY_BUFFER));
+        // Vertex attributes must be 4-byte aligned per element: a u16 id would need
+        // padding to 4 bytes anyway, and f32 holds every id below 2^24 exactly.
+        let fids: Vec<f32> = feature_ids.iter().map(|&f| f as f32).collect();
+        let fid_view = bin.view(&le_f32(fids.iter()), Some(ARRAY_BUFFER));
+        let idx_view = bin.view(&le_u32(indices.iter()), Some(ELEMENT_ARRAY_BUFFER));
+        mesh_views = Some((pos_view, fid_view, idx_view));
+    }
+    let object_view = has_table.then(|| bin.view(&le_u32(objects.iter()), None));
     let mut names = Vec::new();
     let mut offsets = vec![0u32];
     for &id in objects {
@@ -119,6 +128,8 @@ pub fn tile_glb(scene: &Scene, objects: &[u32], centre: DVec3) -> Vec<u8> {
         bin.bytes.push(0);
     }
 
+    let fid_type = FLOAT;
+    let (pos_view, fid_view, idx_view) = mesh_views.unwrap_or_default();
     let mut doc = json!({
         "asset": { "version": "2.0", "generator": "sightline" },
         "extensionsUsed": ["EXT_mesh_features", "EXT_structural_metadata"],
@@ -175,6 +186,23 @@ pub fn tile_glb(scene: &Scene, objects: &[u32], centre: DVec3) -> Vec<u8> {
     if let Some(c) = name_column {
         doc["extensions"]["EXT_structural_metadata"]["propertyTables"][0]["properties"]["name"] = c;
     }
+    if let Value::Object(d) = &mut doc {
+        if !has_mesh {
+            d.remove("meshes");
+            d.remove("accessors");
+            d.remove("materials");
+            doc_remove_mesh_use(d);
+        }
+        if !has_table {
+            // No objects, so no mesh either: nothing uses an extension.
+            d.remove("extensions");
+            d.remove("extensionsUsed");
+        }
+        if bin.bytes.is_empty() {
+            d.remove("bufferViews");
+            d.remove("buffers");
+        }
+    }
     // serde_json cannot fail on a Value built from numbers and strings.
     let mut json_bytes = serde_json::to_vec(&doc).unwrap_or_default();
     while !json_bytes.len().is_multiple_of(4) {
@@ -183,9 +211,22 @@ pub fn tile_glb(scene: &Scene, objects: &[u32], centre: DVec3) -> Vec<u8> {
     container(&json_bytes, &bin.bytes)
 }
 
-/// The GLB container: 12-byte header, the JSON chunk, the BIN chunk.
+/// A document without a mesh: its node keeps only the translation, and
+/// `EXT_mesh_features` (which only a primitive can use) is not listed as used.
+fn doc_remove_mesh_use(d: &mut serde_json::Map<String, Value>) {
+    if let Some(Value::Object(node)) = d.get_mut("nodes").and_then(|n| n.get_mut(0)) {
+        node.remove("mesh");
+    }
+    if let Some(Value::Array(used)) = d.get_mut("extensionsUsed") {
+        used.retain(|e| e != "EXT_mesh_features");
+    }
+}
+
+/// The GLB container: 12-byte header, the JSON chunk, the BIN chunk (left out when
+/// empty: glTF allows no empty buffer).
 fn container(json: &[u8], bin: &[u8]) -> Vec<u8> {
-    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let bin_chunk = if bin.is_empty() { 0 } else { 8 + bin.len() };
+    let total = 12 + 8 + json.len() + bin_chunk;
     let mut out = Vec::with_capacity(total);
     out.extend_from_slice(GLB_MAGIC);
     out.extend_from_slice(&2u32.to_le_bytes());
@@ -193,9 +234,11 @@ fn container(json: &[u8], bin: &[u8]) -> Vec<u8> {
     out.extend_from_slice(&(json.len() as u32).to_le_bytes());
     out.extend_from_slice(&CHUNK_JSON.to_le_bytes());
     out.extend_from_slice(json);
-    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(&CHUNK_BIN.to_le_bytes());
-    out.extend_from_slice(bin);
+    if !bin.is_empty() {
+        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(&CHUNK_BIN.to_le_bytes());
+        out.extend_from_slice(bin);
+    }
     out
 }
 

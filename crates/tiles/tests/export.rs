@@ -117,6 +117,61 @@ fn glb_carries_feature_ids_and_object_ids() {
     assert_eq!(json["asset"]["version"], "2.0");
 }
 
+/// The glTF minimums a GLB must meet: no empty buffer view, accessor or buffer, and
+/// every buffer view inside its buffer.
+fn assert_valid_glb(glb: &[u8]) -> serde_json::Value {
+    assert_eq!(&glb[0..4], b"glTF");
+    assert_eq!(
+        u32::from_le_bytes(glb[8..12].try_into().unwrap()) as usize,
+        glb.len()
+    );
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(glb).unwrap();
+    gltf::import_buffers(&document, None, blob).unwrap();
+    let json_len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+    let json: serde_json::Value = serde_json::from_slice(&glb[20..20 + json_len]).unwrap();
+    let empty = vec![];
+    let field = |k: &str| json[k].as_array().unwrap_or(&empty).clone();
+    for v in field("bufferViews") {
+        assert!(
+            v["byteLength"].as_u64().unwrap() >= 1,
+            "empty buffer view {v}"
+        );
+    }
+    for a in field("accessors") {
+        assert!(a["count"].as_u64().unwrap() >= 1, "empty accessor {a}");
+    }
+    for b in field("buffers") {
+        assert!(b["byteLength"].as_u64().unwrap() >= 1, "empty buffer {b}");
+    }
+    json
+}
+
+#[test]
+fn objects_without_triangles_give_a_valid_glb() {
+    // An empty flat object has no triangle: alone, its tile has no mesh but keeps its row.
+    let scene = Scene::from_objects(vec![
+        Object::flat(Some("nothing".into()), vec![]),
+        Object::rect_block(0.0, 0.0, 10.0, 10.0, 5.0),
+    ]);
+    assert!(scene.objects[0].triangles().is_empty());
+    let json = assert_valid_glb(&tile_glb(&scene, &[0], DVec3::ZERO));
+    assert!(json.get("meshes").is_none());
+    assert_eq!(
+        json["extensions"]["EXT_structural_metadata"]["propertyTables"][0]["count"],
+        1
+    );
+    assert_eq!(
+        json["extensionsUsed"],
+        serde_json::json!(["EXT_structural_metadata"])
+    );
+    // Beside an object with triangles: one mesh, both rows.
+    let json = assert_valid_glb(&tile_glb(&scene, &[0, 1], DVec3::ZERO));
+    assert_eq!(json["meshes"].as_array().unwrap().len(), 1);
+    // No objects at all: no buffer, no BIN chunk.
+    let json = assert_valid_glb(&tile_glb(&scene, &[], DVec3::ZERO));
+    assert!(json.get("buffers").is_none());
+}
+
 #[test]
 fn export_then_import_keeps_objects_bounds_and_names() {
     let dir = tempfile::tempdir().unwrap();

@@ -91,10 +91,25 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         }
         None => None,
     };
+    let labelled = method.as_deref().zip(pvs.as_deref());
+    let png = map_png(&sc, &cell, &truth.visible, labelled)?;
+    write_atomic(&out, &png)?;
+    println!("wrote {}", out.display());
+    Ok(())
+}
+
+/// The PNG map of `cell`: the objects of `visible` (the ground truth, sorted) and, with
+/// a method's name and sorted PVS, each object classified against it (`map`, `demo`).
+pub(crate) fn map_png(
+    sc: &Scene,
+    cell: &ViewCell,
+    visible: &[u32],
+    pvs: Option<(&str, &[u32])>,
+) -> anyhow::Result<Vec<u8>> {
     let classes: Vec<Class> = (0..sc.objects.len() as u32)
         .map(|id| {
-            let seen = truth.visible.binary_search(&id).is_ok();
-            let listed = pvs.as_ref().map_or(seen, |p| p.binary_search(&id).is_ok());
+            let seen = visible.binary_search(&id).is_ok();
+            let listed = pvs.map_or(seen, |(_, p)| p.binary_search(&id).is_ok());
             match (listed, seen) {
                 (true, true) => Class::Visible,
                 (true, false) => Class::PvsNotSeen,
@@ -103,24 +118,21 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
             }
         })
         .collect();
-    let title = match &method {
-        Some(m) => format!(
+    let title = match pvs {
+        Some((m, p)) => format!(
             "{m}, cell {cell}: PVS {} / VS {} / {} objects, missed {}",
-            pvs.as_ref().map_or(0, Vec::len),
-            truth.visible.len(),
+            p.len(),
+            visible.len(),
             sc.objects.len(),
             classes.iter().filter(|c| **c == Class::Missed).count()
         ),
         None => format!(
             "ground truth, cell {cell}: VS {} / {} objects",
-            truth.visible.len(),
+            visible.len(),
             sc.objects.len()
         ),
     };
-    let png = render(&sc, &cell, &classes, &title, method.is_some())?;
-    write_atomic(&out, &png)?;
-    println!("wrote {}", out.display());
-    Ok(())
+    render(sc, cell, &classes, &title, pvs.is_some())
 }
 
 /// Draw the map and encode it as PNG.

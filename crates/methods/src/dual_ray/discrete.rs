@@ -298,11 +298,11 @@ const ALL: u32 = u32::MAX;
 /// Above the finest level a band not `full` is split without looking for the gaps of
 /// its `touch` row or sweeping it: its sub-bands see the same intervals grown, so the
 /// finest level decides every ray alike, and a coarse band computes half the column
-/// bounds (1M metropolis, 4 cells: −2 to −4 % of the time).
+/// bounds.
 ///
 /// A shaft gathered in steps ([`Planar::extend`]) is tested after each: the bands found
 /// covered are kept (`Scratch::covered`) and skipped by the next test of the same shaft,
-/// whose pieces are a superset (150k metropolis: −6 % of this function's instructions).
+/// whose pieces are a superset: a band covered by fewer pieces stays covered by more.
 pub(crate) fn hidden(scratch: &mut Scratch, resolution: u32) -> bool {
     scratch.gap_ray = None;
     let p = &scratch.planar;

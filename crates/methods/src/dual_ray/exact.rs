@@ -19,7 +19,8 @@
 //! a pair hidden for `dual-ray` at any resolution is hidden here too.
 
 use super::discrete::{band_covered, FIRST_LEVEL};
-use super::plane::{ray_misses_piece, Planar, Rect, Scratch};
+use super::occluders::Rect;
+use super::plane::{ray_misses_piece, Planar, Scratch};
 use sightline_geom::{orient2d, DVec2, Orientation};
 
 /// Deepest refinement, as a power of two of the number of first-level bands.

@@ -30,8 +30,7 @@
 //! so the region its set covers contains the discretized one's at every step, and
 //! `dual-ray` keeps containing `dual-ray-exact` (property-tested).
 
-use super::occluders::{Axis, Decomposition};
-use super::plane::{local_rect, Rect};
+use super::occluders::{local_rect, Axis, Decomposition, Rect};
 use sightline_geom::{Aabb3, DVec2};
 use sightline_scene::occluders::{bucket_of, BucketGrid};
 

@@ -55,7 +55,7 @@
 //! (`witness::gap_visible`). With the
 //! discrete test every step after the first gathers only the slabs meeting the rays the
 //! pieces so far leave free (`discrete::free_hull`): the others cannot change the
-//! answer, and on the 1M metropolis they are most of the pieces.
+//! answer, and on large cities they are most of the pieces.
 //!
 //! Degenerate configurations: boxes overlapping in both x and y (the cell inside a
 //! node, an object straddling the cell) have no separating planes and count as visible;
@@ -109,23 +109,19 @@ pub(crate) const DEFAULT_RESOLUTION: u32 = 128;
 /// The first, partial gathering of occluders covers this fraction of the shaft's length,
 /// at least [`FIRST_MIN_M`], next to the narrower of the two boxes, where the shaft is
 /// narrowest: a far object is most often hidden by what stands around it (its own
-/// block), a kd-node wider than the cell by what stands around the cell. On the 100k
-/// metropolis this choice is 5–8 % faster than always the far box's end, which was
-/// 12–15 % faster than always the cell's (0.05, 0.1, 0.2, 0.25 of the length and 30, 60,
-/// 120 m tried: flat within noise). It is gathered in two steps: first the occluders
-/// within [`FIRST_MIN_M`] of the box, then the rest of the fraction over the rays they
-/// leave free ([`discrete::free_hull`]) — on the 1M metropolis, half of the boxes
-/// kilometres away are hidden by the first 60 m (629 → 555 ms per cell; more steps, ×2.5
-/// to ×8 apart, tried: flat).
+/// block), a kd-node wider than the cell by what stands around the cell. It is gathered
+/// in two steps: first the occluders within [`FIRST_MIN_M`] of the box, then the rest of
+/// the fraction over the rays they leave free ([`discrete::free_hull`]): most boxes
+/// kilometres away are hidden by their own block. The order changes which test settles
+/// an answer, never the answer (every gathered piece is a real occluder); the figures
+/// behind the fractions are in `docs/methods/dual-ray.md`.
 const FIRST_FRACTION: f64 = 0.1;
 const FIRST_MIN_M: f64 = 60.0;
 
 /// When the near part leaves a shaft open, the part of this fraction of its length at
 /// the other end is gathered next (over the rays left free), before the middle: rays
 /// from a cell wider than the street run inside the blocks beside it and are stopped
-/// next to the cell, not next to a box kilometres away. On the 1M metropolis 551 → 506
-/// ms per cell (0.005, 0.01, 0.02, 0.1, 0.3 tried: 539, 532, 516, 518, 574 ms); flat on
-/// the 150k one.
+/// next to the cell, not next to a box kilometres away.
 const END_FRACTION: f64 = 0.05;
 
 /// Bands of `RS` over which the rays the near pieces leave free are bounded before the
@@ -146,16 +142,12 @@ const MAX_BOXES_PER_OBJECT: usize = 8;
 /// answer is the dearest: the whole shaft gathered for nothing. Skipping a test never
 /// drops an object (only a test proving hidden does), so the PVS keeps its guarantee;
 /// it may differ by the odd object, as a leaf's box and its objects' boxes are tested
-/// with different ceilings. 1M metropolis, 4 cells: 1,596 → 1,355 ms of CPU (one object
-/// more in one cell); 150k, 25 cells: median 86.1 → 79.0 ms (one more in one cell);
-/// testing at every third level: flat.
+/// with different ceilings.
 const TEST_EVERY_OPEN: u32 = 2;
 
 /// Boxes per kd-leaf. Larger leaves mean fewer levels of nodes to find visible on the
-/// way to each visible object; their objects are tested one by one anyway. 1M
-/// metropolis, 4 cells, paired: 4 → 8 boxes 1,444/1,344 → 1,216/1,256 ms of CPU (16:
-/// 1,184/1,228); 150k, 25 cells: 2,135 → 2,096 ms (16: 2,164); the same PVS but two
-/// objects more over the 25 cells (16: four).
+/// way to each visible object; their objects are tested one by one anyway. Smaller
+/// leaves cost more node tests, larger ones more object tests (`docs/methods/dual-ray.md`).
 const LEAF_SIZE: usize = 8;
 
 /// Which planar algorithm answers the box-to-box tests.

@@ -23,7 +23,7 @@
 //! The prisms are the shared ground-based ones of [`sightline_scene::occluders`] (Observation 1 of
 //! the paper needs occluders that contain the vertical wall under their top).
 
-use sightline_geom::{orient2d, DVec2, Orientation};
+use sightline_geom::{orient2d, Aabb3, DVec2, Orientation};
 use sightline_scene::occluders::{BucketGrid, Occluder};
 
 /// Two edges of a stack closer than this (at both slab ends) are the same wall: a party
@@ -45,6 +45,40 @@ impl Axis {
             Axis::X => p,
             Axis::Y => DVec2::new(p.y, p.x),
         }
+    }
+}
+
+/// A rectangle `[x0, x1] × [y0, y1]` in local (along, across) coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Rect {
+    pub x0: f64,
+    pub x1: f64,
+    pub y0: f64,
+    pub y1: f64,
+}
+
+impl Default for Rect {
+    fn default() -> Self {
+        Rect {
+            x0: 0.0,
+            x1: 0.0,
+            y0: 0.0,
+            y1: 0.0,
+        }
+    }
+}
+
+/// The rectangle of a box in `axis`-local coordinates, translated by `-origin`.
+pub(crate) fn local_rect(b: &Aabb3, axis: Axis) -> Rect {
+    let (p, q) = (
+        axis.to_local(b.min.truncate()),
+        axis.to_local(b.max.truncate()),
+    );
+    Rect {
+        x0: p.x,
+        x1: q.x,
+        y0: p.y,
+        y1: q.y,
     }
 }
 

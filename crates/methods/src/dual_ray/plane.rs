@@ -32,22 +32,13 @@
 //! coverage of `discrete` exact per row, without cracks.
 
 use super::hidden::{Cover, HiddenSet};
-use super::occluders::{Axis, Decomposition, Slab, Trap};
+use super::occluders::{local_rect, Axis, Decomposition, Rect, Slab, Trap};
 use sightline_geom::{orient2d, Aabb3, DVec2, Orientation};
 use sightline_scene::occluders::Stamps;
 
 /// Kept pieces of the ceiling cut are shrunk by this much along `x` (metres): rounding
 /// in `x*(h)` must never make an occluder larger than it is.
 const CUT_MARGIN_M: f64 = 1e-8;
-
-/// A rectangle `[x0, x1] × [y0, y1]` in local (along, across) coordinates.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Rect {
-    pub x0: f64,
-    pub x1: f64,
-    pub y0: f64,
-    pub y1: f64,
-}
 
 /// The ceiling plane `T`: height `z0 + slope * (x - x_anchor)`.
 #[derive(Clone, Copy, Debug, Default)]
@@ -236,17 +227,6 @@ pub(crate) struct Planar {
     pub hidden_pieces: usize,
 }
 
-impl Default for Rect {
-    fn default() -> Self {
-        Rect {
-            x0: 0.0,
-            x1: 0.0,
-            y0: 0.0,
-            y1: 0.0,
-        }
-    }
-}
-
 /// A band of the refinement of `discrete::hidden`: rows `[w0, w1]` at level `n`, the pieces
 /// that can still matter (`lists[first..first + len]`, or all when `len == ALL`) and the
 /// `full` row of the parent band.
@@ -307,20 +287,6 @@ impl Hidden<'_> {
 
     fn cover(&self) -> Option<&Cover> {
         self.set.map(|s| s.cover(self.axis))
-    }
-}
-
-/// The rectangle of a box in `axis`-local coordinates, translated by `-origin`.
-pub(crate) fn local_rect(b: &Aabb3, axis: Axis) -> Rect {
-    let (p, q) = (
-        axis.to_local(b.min.truncate()),
-        axis.to_local(b.max.truncate()),
-    );
-    Rect {
-        x0: p.x,
-        x1: q.x,
-        y0: p.y,
-        y1: q.y,
     }
 }
 

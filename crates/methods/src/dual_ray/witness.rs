@@ -21,10 +21,8 @@ use super::exact::ray_is_clear;
 use super::occluders::Decomposition;
 use super::plane::{Hidden, Planar, Scratch};
 
-/// Rows of `RS` sampled for candidate gaps. Two find nearly every witness eight did at a
-/// quarter of the cost (1M metropolis, 4 cells: 653 vs 676 witnessed, 1,060–1,076 →
-/// 1,028–1,036 ms of CPU; 150k, 25 cells: 1,880–1,947 → 1,808–1,896 ms; one row: 383
-/// witnessed, flat).
+/// Rows of `RS` sampled for candidate gaps: two find nearly every witness that eight
+/// would, at a quarter of the cost; one finds far fewer (`docs/methods/dual-ray.md`).
 const SAMPLES: u32 = 2;
 
 /// Candidates verified per test, widest gap first (more tries cost more than the full
@@ -56,10 +54,9 @@ const GAP_SIDE_ROWS: f64 = 2.0;
 /// `true` when the ray the last `discrete::hidden` found in a gap of its finest uncovered
 /// band (`Scratch::gap_ray`) is verified clear, as [`visible`]'s candidates. After the
 /// pieces at both ends of a shaft are gathered, their gap is far likelier to run clear
-/// through the middle than one of the near pieces alone (1M metropolis, 4 cells: 653 →
-/// 933 witnesses, 1,071–1,079 → 1,040 ms of CPU; with the rows two either side: 1,206
-/// witnesses, 1,040–1,056 → 1,008–1,024 ms, 150k flat; tried after the near pieces too:
-/// flat).
+/// through the middle than one of the near pieces alone; the rows [`GAP_SIDE_ROWS`]
+/// either side of the gap's middle row are tried too, as a gap is rarely straight. A
+/// witness only ever proves "visible" along a verified clear ray, so it changes no PVS.
 pub(crate) fn gap_visible(
     scratch: &mut Scratch,
     decomp: &Decomposition,

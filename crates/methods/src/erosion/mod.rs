@@ -527,8 +527,8 @@ impl ErosionMethod {
     /// `visible`: the two-pass from-centre test of §5.
     ///
     /// A first pass at 1/[`COARSE_FACTOR`] of the azimuth bins hides part of what will be
-    /// hidden for a fraction of the cost (on Lyon's 25 m cells a quarter; its blockers
-    /// also seed the full pass); only what it leaves is tested at full resolution
+    /// hidden for a fraction of the cost (its blockers also seed the full pass); only
+    /// what it leaves is tested at full resolution
     /// (the test is conservative at any resolution, so either pass may hide).
     fn decide(
         &self,

@@ -33,31 +33,15 @@
 //! quarters) applies unchanged: a sub-cell is a smaller `X`, hence denser samples and
 //! less erosion.
 //!
-//! **Measured** (`sightline check`, release, 25 m street cells at z 1.5..2.0 picked by
-//! the `erosion_street_cells` example, 2-core VM under shared load, so times are
-//! pessimistic; medians): the points shrink the occludee, so `erosion-rays` is always
-//! tighter than `erosion-cell`, which erodes by the same element — Lyon 50 cells over
-//! 1.59 against 1.66, Den Haag 50 cells 5.75 against 6.14. Against `erosion` (segment
-//! erosion, shrunk occludees) it depends on the occluders: on the generated city (30
-//! cells) it is tighter on 27 cells and never looser (over 1.30 against 1.34), on Lyon
-//! even (1.59 against 1.60; smaller on 28 cells, larger on 18), on Den Haag looser on
-//! every cell (5.75 against 4.08): its rows of terraced houses are thinner than the
-//! cell, and an erosion by the whole cell (even by its 3 m quarters) empties what an
-//! erosion by one side keeps. Time (single thread, `erosion_timing` example, median of
-//! 10 cells near the middle): Lyon 0.78 s against 1.08 s for `erosion` and 0.89 s for
-//! `erosion-cell`, the generated city 0.24 s against 0.29 s and 0.28 s, Den Haag (8
-//! cells) 0.98 s against 0.68 s and 0.62 s — there more objects reach the deep levels,
-//! where the samples are dense (a 3 m quarter samples every 3 m). With a fourth level of quarters (1.6 m) both methods get
-//! tighter and `erosion-rays` overtakes `erosion` on Den Haag (PVS smaller on 8 of 8
-//! cells), for about 1.5 × its time.
+//! **Compared with its siblings.** The points shrink the occludee, so `erosion-rays` is
+//! never looser than `erosion-cell`, which erodes by the same element. Against
+//! `erosion` (segment erosion, shrunk occludees) it depends on the occluders: an erosion
+//! by the whole cell empties rows of buildings thinner than the cell that an erosion by
+//! one side keeps, which the deeper quarters make up for: `erosion-rays` refines to
+//! [`super::RAYS_MAX_DEPTH`] levels (sub-cells down to [`super::RAYS_MIN_SUBCELL_M`]),
+//! its samples denser with every level. The measurements behind these choices are in
+//! `docs/methods/erosion.md`.
 //!
-//! **Fourth level** (session 4): `erosion-rays` now refines to
-//! [`super::RAYS_MAX_DEPTH`] = 4 levels (the other methods had 3 then). `sightline check`, 20
-//! street cells of 25 m at z 1.5..2.0 (`erosion_street_cells`), release, single
-//! thread, 2-core VM under shared load (load ≈ 3): Den Haag over median 5.76 → 2.61
-//! (p90 6.30 → 2.88, hidden 56 % → 80 %; `erosion` 4.11), Lyon 1.50 → 1.33 (p90 1.68 →
-//! 1.48), missed 0; time per cell (median) Den Haag 1.32 s → 2.19 s, Lyon 0.57 s →
-//! 0.44 s (the skipping march of [`super::occlusion`] pays for the level there).
 
 use super::shrink::clip_ring;
 use sightline_geom::polygon::ring_signed_area;

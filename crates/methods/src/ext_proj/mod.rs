@@ -12,7 +12,7 @@
 //! 1. occluder selection by solid angle through a precomputed relevance tree
 //!    (`occluders`); occluders are the fused inner prisms of the objects;
 //! 2. for each of the six directions of the cell, a projection plane placed by the
-//!    filled-pixels heuristic and extended by 1.5 (`planes`);
+//!    filled-pixels heuristic and extended by [`DEFAULT_EXTENSION`] (`planes`);
 //! 3. extended projections of convex occluder pieces (intersection of the views from
 //!    the cell's vertices) and slices of the pieces cut by the plane (`projection`),
 //!    drawn with union-aware inner coverage into an extended depth map and its
@@ -167,14 +167,14 @@ pub(crate) const DEFAULT_RESOLUTION_PX: usize = 512;
 /// Default extension of the planes for the corner directions. The paper's 1.5
 /// (§6.1: "extended (e.g., by 1.5 used in our tests)") makes every pixel 1.5 times the frustum's;
 /// an occludee's Projection must only fit inside some plane, which 1.2 still allows
-/// at the diagonals. Lyon, 50 street cells of 25 m at 256 px: mean PVS 402 (1.5) →
-/// 371 (1.2); at 512 px with 1.2: 317, Den Haag 519 → 448 (missed 0 everywhere).
+/// at the diagonals, and smaller pixels give a tighter PVS
+/// (`docs/methods/ext-proj.md`).
 pub const DEFAULT_EXTENSION: f64 = 1.2;
 
 /// Default resolution with the sweep (`--resolution` overrides it): the sweep fuses
 /// leaves only where their Projections stay several pixels wide after the K-pixel
-/// kernel of each step; on the dense forest (0.5 m cells, 15 planes) it culls ~1 % of
-/// the trees at 256 px and ~43 % at 512.
+/// kernel of each step, and at 256 px few of a dense forest's leaves do
+/// (`docs/methods/ext-proj.md`).
 pub(crate) const SWEEP_RESOLUTION_PX: usize = 512;
 
 /// Resolution (pixels per side) of the depth maps on which candidate planes are scored.
