@@ -48,12 +48,36 @@ __all__ = [
     "build",
     "check",
     "merge",
+    "methods",
     "read_cells",
     "write_cells",
 ]
 
 #: Every method name, in the order of the specification.
 METHOD_NAMES: Tuple[str, ...] = tuple(_native.METHOD_NAMES)
+
+
+
+def methods() -> list:
+    """The registry: every method with its ``family``, ``paper``, ``summary``, whether
+    it is ``conservative`` and its ``knobs`` (keys accepted as keyword arguments by
+    :meth:`Scene.pvs`, :func:`build` and :func:`check`, as ``--set key=value``).
+
+    >>> [m["name"] for m in sightline.methods()][:2]  # doctest: +SKIP
+    ['erosion', 'erosion-segment']
+    """
+    return json.loads(_native.methods_json())
+
+
+def _knobs(knobs: dict) -> list:
+    """Method knobs as ``(key, value)`` text pairs (``True`` → ``"true"``)."""
+    out = []
+    for k, v in knobs.items():
+        if isinstance(v, bool):
+            v = "true" if v else "false"
+        out.append((str(k), str(v)))
+    return out
+
 
 PathLike = Union[str, "os.PathLike[str]"]
 CellLike = Union[str, Sequence[float], np.ndarray]
@@ -224,15 +248,17 @@ class Scene:
         resolution: int | None = None,
         sweep: bool = False,
         planes: int | None = None,
+        **knobs: Any,
     ) -> np.ndarray:
         """The potentially visible set of one viewcell: sorted object ids (uint32).
 
-        ``cell`` is 6 numbers or an ``"x0,y0,z0,x1,y1,z1"`` string.
+        ``cell`` is 6 numbers or an ``"x0,y0,z0,x1,y1,z1"`` string; ``knobs`` are the
+        method's other knobs by key (:func:`methods`), e.g. ``virtual_occluders=True``.
 
         >>> scene.pvs("0,0,1.5,10,10,2", method="erosion")  # doctest: +SKIP
         array([  0,   3,  17, ...], dtype=uint32)
         """
-        return _ids(self._native.pvs(_cell(cell), method, resolution, sweep, planes))
+        return _ids(self._native.pvs(_cell(cell), method, resolution, sweep, planes, _knobs(knobs)))
 
     def pvs_many(
         self,
@@ -242,13 +268,16 @@ class Scene:
         resolution: int | None = None,
         sweep: bool = False,
         planes: int | None = None,
+        **knobs: Any,
     ) -> list:
         """The PVS of many cells, computed in parallel on ``threads`` threads (all cores
         when ``None``) with the GIL released. A list of uint32 arrays, one per cell.
 
         >>> sets = scene.pvs_many(scene.cells(25), "dual-ray", threads=2)  # doctest: +SKIP
         """
-        raw = self._native.pvs_many(_cells_bytes(cells), method, resolution, sweep, planes, threads)
+        raw = self._native.pvs_many(
+            _cells_bytes(cells), method, resolution, sweep, planes, threads, _knobs(knobs)
+        )
         return [_ids(r) for r in raw]
 
     def truth(self, cell: CellLike, samples: int | None = None, resolution: int | None = None) -> dict:
@@ -287,6 +316,7 @@ def build(
     planes: int | None = None,
     threads: int | None = None,
     progress: Callable[[int, int], None] | None = None,
+    **knobs: Any,
 ) -> dict:
     """Build the ``.pvs`` of ``cells`` with ``method`` into ``out``, as ``sightline build``.
 
@@ -315,6 +345,7 @@ def build(
             _shard(shard),
             threads,
             progress,
+            _knobs(knobs),
         )
     )
 
@@ -431,6 +462,7 @@ def check(
     planes: int | None = None,
     threads: int | None = None,
     strict: bool = False,
+    **knobs: Any,
 ) -> dict:
     """A PVS against the sampled ground truth, as ``sightline check --json``.
 
@@ -462,6 +494,7 @@ def check(
             sweep,
             planes,
             threads,
+            _knobs(knobs),
         )
     )
     if strict and report["conservative"] and report["missed"] > 0:

@@ -31,6 +31,7 @@ class NativeScene:
         resolution: Optional[int] = None,
         sweep: bool = False,
         planes: Optional[int] = None,
+        knobs: List[Tuple[str, str]] = ...,
     ) -> bytes: ...
     def pvs_many(
         self,
@@ -40,6 +41,7 @@ class NativeScene:
         sweep: bool = False,
         planes: Optional[int] = None,
         threads: Optional[int] = None,
+        knobs: List[Tuple[str, str]] = ...,
     ) -> List[bytes]: ...
     def truth_json(
         self, cell: Sequence[float], samples: Optional[int] = None, resolution: Optional[int] = None
@@ -60,8 +62,13 @@ class NativePvsFile:
 
 def parse_cell(text: str) -> Tuple[float, float, float, float, float, float]: ...
 def check_method(
-    method: str, resolution: Optional[int] = None, sweep: bool = False, planes: Optional[int] = None
+    method: str,
+    resolution: Optional[int] = None,
+    sweep: bool = False,
+    planes: Optional[int] = None,
+    knobs: List[Tuple[str, str]] = ...,
 ) -> None: ...
+def methods_json() -> str: ...
 def build(
     scene: NativeScene,
     cells: bytes,
@@ -74,6 +81,7 @@ def build(
     shard: Optional[str] = None,
     threads: Optional[int] = None,
     progress: Optional[Callable[[int, int], None]] = None,
+    knobs: List[Tuple[str, str]] = ...,
 ) -> str: ...
 def merge(inputs: List[str], out: str) -> Tuple[int, int]: ...
 def read_cells(path: str) -> bytes: ...
@@ -88,4 +96,5 @@ def check(
     sweep: bool = False,
     planes: Optional[int] = None,
     threads: Optional[int] = None,
+    knobs: List[Tuple[str, str]] = ...,
 ) -> str: ...

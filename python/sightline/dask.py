@@ -123,16 +123,15 @@ def build(
     from every worker (a shared file system). ``cells`` is an N×6 array or a cells.json
     path; ``shards`` defaults to four per worker thread (at most one per cell); ``opts``
     are the method options of :func:`sightline.build` (``resolution``, ``sweep``,
-    ``planes``). ``threads`` is the number of threads of each task (the worker's thread
+    ``planes``, and any other knob of :func:`sightline.methods` by key). ``threads`` is the number of threads of each task (the worker's thread
     count when ``None``); ``progress(shard, done, total)`` is called on the workers.
     The shard files, their journals and the cells live in :func:`shard_dir` ``(out)``,
     removed after a successful merge unless ``keep_shards``. Returns the merge result and
     the statistics of every shard (``resumed`` counts the cells a retried task took
     from its journal).
     """
-    for key in opts:
-        if key not in ("resolution", "sweep", "planes"):
-            raise TypeError(f"sightline.dask.build() got an unexpected keyword argument '{key}'")
+    common = ("resolution", "sweep", "planes")
+    knobs = {k: v for k, v in opts.items() if k not in common}
     scene_path = os.path.abspath(os.fspath(scene_path))
     if not os.path.exists(scene_path):
         raise sightline.SceneError(f"cannot load {scene_path}: no such file")
@@ -149,7 +148,13 @@ def build(
         raise sightline.PvsFileError(f"shards must be at least 1, got {shards}")
     shards = min(shards, n_cells)
     # Fail on the client, not on every worker, for a bad method or options.
-    sightline._native.check_method(method, opts.get("resolution"), bool(opts.get("sweep", False)), opts.get("planes"))
+    sightline._native.check_method(
+        method,
+        opts.get("resolution"),
+        bool(opts.get("sweep", False)),
+        opts.get("planes"),
+        sightline._knobs(knobs),
+    )
 
     out = Path(os.path.abspath(os.fspath(out)))
     directory = shard_dir(out)

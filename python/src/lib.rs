@@ -29,6 +29,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<store::NativePvsFile>()?;
     m.add_function(wrap_pyfunction!(scene::parse_cell, m)?)?;
     m.add_function(wrap_pyfunction!(scene::check_method, m)?)?;
+    m.add_function(wrap_pyfunction!(scene::methods_json, m)?)?;
     m.add_function(wrap_pyfunction!(store::build, m)?)?;
     m.add_function(wrap_pyfunction!(store::merge, m)?)?;
     m.add_function(wrap_pyfunction!(store::read_cells, m)?)?;

@@ -19,7 +19,8 @@ const MAX_TRUTH_RESOLUTION: u32 = 8192;
 const MAX_TRUTH_SAMPLES: u32 = 100_000;
 
 /// The options that identify a prepared method.
-type MethodKey = (String, Option<u32>, bool, Option<u32>);
+/// A method and its settings (every field of `MethodOptions`, knobs included, as JSON).
+type MethodKey = (String, String);
 
 #[pyclass(module = "sightline._native", frozen, name = "NativeScene")]
 pub struct NativeScene {
@@ -49,6 +50,7 @@ pub fn method_options(
     resolution: Option<u32>,
     sweep: bool,
     planes: Option<u32>,
+    knobs: Vec<(String, String)>,
 ) -> PyResult<MethodOptions> {
     if !sightline_methods::METHOD_NAMES.contains(&method) {
         return Err(method_err(sightline_methods::MethodError::Unknown(
@@ -81,12 +83,36 @@ pub fn method_options(
             "resolution must be a positive number of pixels",
         ));
     }
-    Ok(MethodOptions {
+    let opts = MethodOptions {
         resolution_px: resolution,
         sweep,
         planes,
+        set: knobs,
         ..Default::default()
-    })
+    };
+    // The registry validates every knob (by key, as `--set key=value`).
+    let m: sightline_methods::Method = method.parse().map_err(method_err)?;
+    m.options(&opts).map_err(method_err)?;
+    Ok(opts)
+}
+
+/// The registry as JSON: every method with its family, paper, guarantee and knobs.
+#[pyfunction]
+pub fn methods_json() -> String {
+    let list: Vec<serde_json::Value> = sightline_methods::Method::ALL
+        .iter()
+        .map(|m| {
+            serde_json::json!({
+                "name": m.name(),
+                "family": format!("{:?}", m.family()).to_lowercase(),
+                "paper": m.paper(),
+                "summary": m.summary(),
+                "conservative": m.is_conservative(),
+                "knobs": m.knobs().iter().map(|k| serde_json::json!({"key": k.key, "help": k.help})).collect::<Vec<_>>(),
+            })
+        })
+        .collect();
+    serde_json::Value::Array(list).to_string()
 }
 
 /// A viewcell from six numbers, validated (finite, min <= max).
@@ -174,9 +200,7 @@ impl NativeScene {
     pub fn method(&self, name: &str, opts: &MethodOptions) -> PyResult<Arc<dyn VisibilityMethod>> {
         let key = (
             name.to_string(),
-            opts.resolution_px,
-            opts.sweep,
-            opts.planes,
+            serde_json::to_string(opts).map_err(|e| err(Kind::Method, e.to_string()))?,
         );
         let poisoned = || err(Kind::Method, "method cache poisoned");
         if let Some(m) = self.methods.lock().map_err(|_| poisoned())?.get(&key) {
@@ -292,7 +316,8 @@ impl NativeScene {
     }
 
     /// The PVS of one cell, as little-endian `u32` bytes.
-    #[pyo3(signature = (cell, method, resolution=None, sweep=false, planes=None))]
+    #[pyo3(signature = (cell, method, resolution=None, sweep=false, planes=None, knobs=Vec::new()))]
+    #[allow(clippy::too_many_arguments)]
     fn pvs<'py>(
         &self,
         py: Python<'py>,
@@ -301,9 +326,10 @@ impl NativeScene {
         resolution: Option<u32>,
         sweep: bool,
         planes: Option<u32>,
+        knobs: Vec<(String, String)>,
     ) -> PyResult<Bound<'py, PyBytes>> {
         let c = self::cell(cell)?;
-        let opts = method_options(method, resolution, sweep, planes)?;
+        let opts = method_options(method, resolution, sweep, planes, knobs)?;
         let ids = detached(py, || {
             self.method(method, &opts)?.pvs(&c).map_err(method_err)
         })?;
@@ -311,7 +337,7 @@ impl NativeScene {
     }
 
     /// The PVS of many cells (N×6 `f64` bytes) computed in parallel on `threads`.
-    #[pyo3(signature = (cells, method, resolution=None, sweep=false, planes=None, threads=None))]
+    #[pyo3(signature = (cells, method, resolution=None, sweep=false, planes=None, threads=None, knobs=Vec::new()))]
     #[allow(clippy::too_many_arguments)]
     fn pvs_many<'py>(
         &self,
@@ -322,9 +348,10 @@ impl NativeScene {
         sweep: bool,
         planes: Option<u32>,
         threads: Option<usize>,
+        knobs: Vec<(String, String)>,
     ) -> PyResult<Vec<Bound<'py, PyBytes>>> {
         let cells = cells_from_bytes(cells)?;
-        let opts = method_options(method, resolution, sweep, planes)?;
+        let opts = method_options(method, resolution, sweep, planes, knobs)?;
         let pool = pool(threads)?;
         let sets = detached(py, || {
             let m = self.method(method, &opts)?;
@@ -406,14 +433,15 @@ pub fn truth_options(samples: Option<u32>, resolution: Option<u32>) -> PyResult<
 
 /// Check a method name and its options as `build` would, without preparing anything.
 #[pyfunction]
-#[pyo3(signature = (method, resolution=None, sweep=false, planes=None))]
+#[pyo3(signature = (method, resolution=None, sweep=false, planes=None, knobs=Vec::new()))]
 pub fn check_method(
     method: &str,
     resolution: Option<u32>,
     sweep: bool,
     planes: Option<u32>,
+    knobs: Vec<(String, String)>,
 ) -> PyResult<()> {
-    method_options(method, resolution, sweep, planes).map(|_| ())
+    method_options(method, resolution, sweep, planes, knobs).map(|_| ())
 }
 
 /// Parse `"x0,y0,z0,x1,y1,z1"` into six numbers, with the CLI's message.

@@ -28,7 +28,7 @@ fn open(path: &Path) -> PyResult<PvsFile> {
 /// the worker threads (with the GIL) at the start and after every finished cell.
 #[pyfunction]
 #[pyo3(signature = (scene, cells, method, out, resolution=None, sweep=false, planes=None,
-                    resume=false, shard=None, threads=None, progress=None))]
+                    resume=false, shard=None, threads=None, progress=None, knobs=Vec::new()))]
 #[allow(clippy::too_many_arguments)]
 pub fn build(
     py: Python<'_>,
@@ -43,6 +43,7 @@ pub fn build(
     shard: Option<&str>,
     threads: Option<usize>,
     progress: Option<Py<PyAny>>,
+    knobs: Vec<(String, String)>,
 ) -> PyResult<String> {
     let shard = shard
         .map(|s| Shard::parse(s, |k| std::env::var(k).ok()))
@@ -52,7 +53,7 @@ pub fn build(
     if cells.is_empty() {
         return Err(err(Kind::Cell, "no cells to build"));
     }
-    let opts = method_options(method, resolution, sweep, planes)?;
+    let opts = method_options(method, resolution, sweep, planes, knobs)?;
     let pool = pool(threads)?;
     let callback_error: Mutex<Option<PyErr>> = Mutex::new(None);
     let report = |done: usize, total: usize| {
@@ -158,7 +159,7 @@ pub fn cells_json(cells: &[u8]) -> PyResult<String> {
 /// (on `cells`, or on `k` street cells) against the ground truth.
 #[pyfunction]
 #[pyo3(signature = (scene, pvs=None, method=None, cells=None, k=None, resolution=None,
-                    sweep=false, planes=None, threads=None))]
+                    sweep=false, planes=None, threads=None, knobs=Vec::new()))]
 #[allow(clippy::too_many_arguments)]
 pub fn check(
     py: Python<'_>,
@@ -171,6 +172,7 @@ pub fn check(
     sweep: bool,
     planes: Option<u32>,
     threads: Option<usize>,
+    knobs: Vec<(String, String)>,
 ) -> PyResult<String> {
     if k == Some(0) {
         return Err(err(Kind::Cell, "cells must be a positive number of cells"));
@@ -186,10 +188,10 @@ pub fn check(
         }
         (None, None) => return Err(err(Kind::Method, "check needs method=NAME or a .pvs file")),
         (Some(file), None) => {
-            if sweep || planes.is_some() || resolution.is_some() {
+            if sweep || planes.is_some() || resolution.is_some() || !knobs.is_empty() {
                 return Err(err(
                     Kind::Method,
-                    "resolution, sweep and planes are method options, not options of a .pvs file",
+                    "resolution, sweep, planes and knobs are method options, not options of a .pvs file",
                 ));
             }
             if given.is_some() {
@@ -214,7 +216,7 @@ pub fn check(
             (Arc::new(stored), picked)
         }
         (None, Some(name)) => {
-            let opts = method_options(name, resolution, sweep, planes)?;
+            let opts = method_options(name, resolution, sweep, planes, knobs.clone())?;
             let m = detached(py, || scene.method(name, &opts))?;
             let picked = match given {
                 Some(c) if c.is_empty() => return Err(err(Kind::Cell, "no cells")),

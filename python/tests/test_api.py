@@ -98,6 +98,27 @@ def test_bad_method_and_options_raise(scene, street_cell):
         scene.truth(street_cell, samples=0)
 
 
+def test_registry_and_knobs_by_key(scene, street_cell, tmp_path):
+    ms = {m["name"]: m for m in sightline.methods()}
+    assert set(ms) == set(sightline.METHOD_NAMES)
+    assert not ms["sampled"]["conservative"] and ms["dual-ray"]["conservative"]
+    keys = {k["key"] for k in ms["dual-ray"]["knobs"]}
+    assert {"resolution", "virtual_occluders", "hidden_boxes"} <= keys
+    base = set(scene.pvs(street_cell, method="dual-ray").tolist())
+    tighter = set(scene.pvs(street_cell, method="dual-ray", virtual_occluders=True).tolist())
+    truth = set(scene.truth(street_cell, samples=16, resolution=128)["visible"].tolist())
+    # Virtual occluders can only remove hidden objects.
+    assert truth <= tighter <= base
+    with pytest.raises(MethodError, match="unknown option 'nope'"):
+        scene.pvs(street_cell, method="dual-ray", nope=1)
+    with pytest.raises(MethodError, match="hidden_boxes"):
+        scene.pvs(street_cell, method="dual-ray", hidden_boxes="maybe")
+    out = tmp_path / "vo.pvs"
+    sightline.build(scene, scene.cells(size=10)[:4], "dual-ray", out, virtual_occluders=True)
+    params = sightline.PvsFile.open(out).params
+    assert params.get("virtual_occluders") == "true"
+
+
 def test_truth_of_a_cell_inside_a_block_raises(scene):
     with pytest.raises(CellError, match="no free space"):
         scene.truth([X0 + 5, Y0 + 5, 1.5, X0 + 10, Y0 + 10, 2.0], samples=8, resolution=64)

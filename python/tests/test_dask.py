@@ -76,5 +76,6 @@ def test_dask_build_bad_input(client, scene_path, tmp_path):
         sightline.dask.build(scene_path, [[0, 0, 1, 1, 1, 2]], "nope", tmp_path / "x.pvs", client)
     with pytest.raises(sightline.SceneError):
         sightline.dask.build(tmp_path / "none.geojson", [[0, 0, 1, 1, 1, 2]], "all", tmp_path / "x.pvs", client)
-    with pytest.raises(TypeError):
+    # Other keywords are method knobs by key: an unknown one names the method's knobs.
+    with pytest.raises(sightline.MethodError, match="colour"):
         sightline.dask.build(scene_path, [[0, 0, 1, 1, 1, 2]], "all", tmp_path / "x.pvs", client, colour=1)
