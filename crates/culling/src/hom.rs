@@ -8,28 +8,35 @@
 //!   occlusion map*. An occludee's outer screen rectangle is tested from the level where
 //!   it spans about two texels: a texel at least as opaque as the threshold is accepted,
 //!   a less opaque one is refined into its children, a finest pixel below it fails.
-//! * **depth**: the *depth estimation buffer* (DEB), a coarse grid holding for each
-//!   block the farthest depth of any occluder face whose screen bounding box meets it.
-//!   The occludee must be strictly farther than every DEB block its rectangle meets.
+//! * **depth estimation**: the paper's depth estimation buffer (DEB) keeps, per coarse
+//!   block, the *farthest* depth of the occluders projecting there. An occludee that is
+//!   itself an occluder (every building of a city) then always has its own far faces in
+//!   the DEB and is never culled. Here the depth is estimated by *slices* instead: one
+//!   occlusion map per far bound `d_k` ([`DEPTH_SLICES_M`]) holds only the pixels covered
+//!   by occluders nearer than `d_k`, and an occludee whose nearest depth is at least
+//!   `d_k` is tested in map `k`. Occluder selection: those within
+//!   [`HomOptions::occluder_range_m`] of the eye (§5 of the paper selects nearby large
+//!   occluders).
 //!
 //! Conservative mode (`hom`, the default): opacity is drawn with inner coverage of the
 //! *union* of each prism's front faces (a pixel is opaque only if the prism covers it
-//! entirely; [`sightline_raster::Framebuffer::draw_screen_union`]), and the threshold is
-//! 1.0 (exact counts, no float averaging), so an accepted rectangle is covered pixel by
-//! pixel; each covering face meets the pixel's block, so its depth is at most the
-//! block's DEB value, which the occludee's nearest depth exceeds. Hidden is hidden.
+//! entirely; [`sightline_raster::Framebuffer::draw_screen_union`], whose per-pixel depth
+//! is an upper bound of the union's), and the threshold is 1.0 (exact counts, no float
+//! averaging), so an accepted rectangle is covered pixel by pixel by occluders strictly
+//! nearer than the occludee. Hidden is hidden.
 //!
 //! `hom-approx` uses the paper's approximate culling (threshold below 1, e.g. 0.9): it
 //! may cull objects seen through small holes; [`Culler::is_conservative`] is false.
 
-use crate::frustum::{box_in_view, clip_project, f32_up, BoxInView, Frustum};
+use crate::frustum::{box_in_view, clip_project, BoxInView, Frustum};
 use crate::scene::CullScene;
 use crate::{Culler, Frame};
 use sightline_raster::{Framebuffer, ScreenVertex};
 use std::sync::Arc;
 
-/// DEB block side, in occlusion-map pixels.
-const DEB_BLOCK: u32 = 8;
+/// Far bounds of the depth slices (metres): slice `k` holds the occluders nearer than
+/// `DEPTH_SLICES_M[k]`.
+pub const DEPTH_SLICES_M: [f64; 8] = [10.0, 20.0, 40.0, 80.0, 160.0, 320.0, 640.0, 1280.0];
 
 /// Knobs of the HOM culler.
 #[derive(Clone, Debug, PartialEq)]
@@ -38,6 +45,8 @@ pub struct HomOptions {
     pub width_px: u32,
     /// Opacity threshold: 1.0 is conservative, below is the approximate mode.
     pub opacity_threshold: f64,
+    /// Only occluders within this distance of the eye are drawn (metres).
+    pub occluder_range_m: f64,
 }
 
 impl Default for HomOptions {
@@ -45,6 +54,7 @@ impl Default for HomOptions {
         HomOptions {
             width_px: 256,
             opacity_threshold: 1.0,
+            occluder_range_m: 250.0,
         }
     }
 }
@@ -70,24 +80,6 @@ impl Hom {
     pub fn new(scene: Arc<CullScene>, opts: HomOptions) -> Hom {
         Hom { scene, opts }
     }
-}
-
-/// `w(x, y)` of a planar screen polygon (Newell's method in `(x, y, w)`), if it has area.
-fn screen_plane(v: &[ScreenVertex]) -> Option<impl Fn(f64, f64) -> f64> {
-    let n = v.len();
-    let (mut nx, mut ny, mut nw) = (0.0, 0.0, 0.0);
-    for k in 0..n {
-        let (a, b) = (v[k], v[(k + 1) % n]);
-        nx += (a.y - b.y) * (a.w + b.w);
-        ny += (a.w - b.w) * (a.x + b.x);
-        nw += (a.x - b.x) * (a.y + b.y);
-    }
-    // Under a pixel of area, no pixel is covered entirely: the plane is not needed.
-    if !(nw.abs() >= 2.0) {
-        return None;
-    }
-    let (gx, gy, o) = (-nx / nw, -ny / nw, v[0]);
-    Some(move |x: f64, y: f64| o.w + gx * (x - o.x) + gy * (y - o.y))
 }
 
 /// The opacity pyramid: per level `(cols, rows, opaque pixel count, on-screen pixels)`.
@@ -203,13 +195,16 @@ impl Culler for Hom {
         let view = frustum.view_at(w, h);
         let allowed = candidates.map(|c| crate::mask_of(c, self.scene.objects()));
         let mut fb = Framebuffer::new(w, h);
-        let (bw, bh) = (w.div_ceil(DEB_BLOCK), h.div_ceil(DEB_BLOCK));
-        let mut deb = vec![0f32; (bw * bh) as usize];
         let mut frame = Frame::new(candidates.map_or(self.scene.objects(), |c| c.len()));
         let mut pieces: Vec<Vec<ScreenVertex>> = Vec::new();
         let mut scratch = Vec::with_capacity(16);
+        let range2 = self.opts.occluder_range_m * self.opts.occluder_range_m;
         for o in &self.scene.occluders {
             if allowed.as_ref().is_some_and(|a| !a[o.object as usize]) {
+                continue;
+            }
+            // Occluder selection by distance (Zhang et al. §5: nearby large occluders).
+            if frustum.eye.clamp(o.lo, o.hi).distance_squared(frustum.eye) > range2 {
                 continue;
             }
             if box_in_view(&view, o.lo, o.hi) == BoxInView::Outside {
@@ -218,60 +213,20 @@ impl Culler for Hom {
             pieces.clear();
             for f in o.front_faces(frustum.eye) {
                 frame.occluder_tris += f.tris as u64;
-                if !clip_project(&view, &f.verts, &mut scratch) {
-                    continue;
+                if clip_project(&view, &f.verts, &mut scratch) {
+                    pieces.push(scratch.clone());
                 }
-                let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
-                let mut wmin = f64::MAX;
-                for p in &scratch {
-                    x0 = x0.min(p.x);
-                    x1 = x1.max(p.x);
-                    y0 = y0.min(p.y);
-                    y1 = y1.max(p.y);
-                    wmin = wmin.min(p.w);
-                }
-                if x1 < 0.0 || y1 < 0.0 || x0 > w as f64 || y0 > h as f64 {
-                    continue;
-                }
-                // The face's farthest depth within each block it may touch: `w` is
-                // affine on screen, so its minimum over the block (clipped to the face's
-                // box) is at a corner, and never below the face's smallest vertex `w`
-                // (Zhang et al. take the farthest depth of the whole occluder; this is
-                // the same bound, per block).
-                let plane = screen_plane(&scratch);
-                let bx = |x: f64| ((x.max(0.0) as u32).min(w - 1) / DEB_BLOCK).min(bw - 1);
-                let by = |y: f64| ((y.max(0.0) as u32).min(h - 1) / DEB_BLOCK).min(bh - 1);
-                for yb in by(y0)..=by(y1) {
-                    for xb in bx(x0)..=bx(x1) {
-                        let wb = match plane {
-                            Some(ref pl) => {
-                                let (xa, xb2) = (
-                                    ((xb * DEB_BLOCK) as f64).max(x0),
-                                    (((xb + 1) * DEB_BLOCK) as f64).min(x1),
-                                );
-                                let (ya, yb2) = (
-                                    ((yb * DEB_BLOCK) as f64).max(y0),
-                                    (((yb + 1) * DEB_BLOCK) as f64).min(y1),
-                                );
-                                pl(xa, ya)
-                                    .min(pl(xb2, ya))
-                                    .min(pl(xa, yb2))
-                                    .min(pl(xb2, yb2))
-                                    .max(wmin)
-                            }
-                            None => wmin,
-                        };
-                        let far = f32_up(1.0 / wb * (1.0 + 1e-9));
-                        let d = &mut deb[(yb * bw + xb) as usize];
-                        *d = d.max(far);
-                    }
-                }
-                pieces.push(scratch.clone());
             }
             let refs: Vec<&[ScreenVertex]> = pieces.iter().map(|p| p.as_slice()).collect();
             fb.draw_screen_union(&refs, o.object);
         }
-        let pyramid = Pyramid::new(w, h, |i, j| fb.depth_at(i, j) < f32::INFINITY);
+        // One occlusion map per depth slice: pixel opaque in slice k when covered by
+        // occluders all nearer than DEPTH_SLICES_M[k] (the pixel's inner-union depth is
+        // an upper bound of them).
+        let pyramids: Vec<Pyramid> = DEPTH_SLICES_M
+            .iter()
+            .map(|&d| Pyramid::new(w, h, |i, j| (fb.depth_at(i, j) as f64) < d))
+            .collect();
         crate::for_candidates(self.scene.objects(), candidates, |id| {
             let (lo, hi) = self.scene.boxes[id as usize];
             match box_in_view(&view, lo, hi) {
@@ -284,12 +239,12 @@ impl Culler for Hom {
                     j1,
                     z_near,
                 } => {
-                    let behind = (j0 / DEB_BLOCK..=j1 / DEB_BLOCK).all(|yb| {
-                        (i0 / DEB_BLOCK..=i1 / DEB_BLOCK)
-                            .all(|xb| z_near > deb[(yb * bw + xb) as usize])
+                    // The farthest slice entirely in front of the occludee.
+                    let k = DEPTH_SLICES_M.iter().rposition(|&d| d <= z_near as f64);
+                    let hidden = k.is_some_and(|k| {
+                        pyramids[k].rect_opaque([i0, j0, i1, j1], self.opts.opacity_threshold)
                     });
-                    if behind && pyramid.rect_opaque([i0, j0, i1, j1], self.opts.opacity_threshold)
-                    {
+                    if hidden {
                         frame.occlusion_culled += 1;
                     } else {
                         frame.visible.push(id);
@@ -299,5 +254,19 @@ impl Culler for Hom {
         });
         frame.finish();
         frame
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pyramid_accepts_a_fully_opaque_rectangle_only() {
+        let p = Pyramid::new(20, 10, |i, _| i < 12);
+        assert!(p.rect_opaque([0, 0, 11, 9], 1.0));
+        assert!(p.rect_opaque([3, 2, 7, 5], 1.0));
+        assert!(!p.rect_opaque([3, 2, 12, 5], 1.0));
+        assert!(!p.rect_opaque([12, 0, 19, 9], 1.0));
     }
 }

@@ -22,9 +22,9 @@
 //! use sightline_scene::{Object, Scene};
 //! use glam::DVec3;
 //! use std::sync::Arc;
-//! // A wall 10 m ahead hides a low block behind it, not a tower.
+//! // A wall 3 m high, 10 m ahead, hides a low block behind it, not a tower.
 //! let scene = Scene::from_objects(vec![
-//!     Object::rect_block(-20.0, 10.0, 20.0, 11.0, 10.0),
+//!     Object::rect_block(-20.0, 10.0, 20.0, 11.0, 3.0),
 //!     Object::rect_block(-2.0, 20.0, 2.0, 24.0, 3.0),
 //!     Object::rect_block(-2.0, 30.0, 2.0, 34.0, 60.0),
 //! ]);

@@ -35,6 +35,9 @@ pub const TILE_W: u32 = 32;
 /// Tile height in pixels.
 pub const TILE_H: u32 = 8;
 const TH: usize = TILE_H as usize;
+/// A partial coverage farther than this factor times the working layer's depth is not
+/// merged into it.
+const FAR_MERGE: f32 = 1.5;
 /// Inner coverage shrinks chords by this much (pixels), towards "not covered".
 const EPS_PX: f64 = 1e-7;
 
@@ -237,14 +240,31 @@ impl MaskedBuffer {
             }
         } else {
             let empty = t.mask.iter().all(|&m| m == 0);
-            for (m, c) in t.mask.iter_mut().zip(cov) {
+            let mut merged = t.mask;
+            for (m, c) in merged.iter_mut().zip(cov) {
                 *m |= c;
             }
-            t.z0 = if empty { zt } else { t.z0.max(zt) };
-            if self.full(tx, ty, &t.mask) {
-                t.z1 = t.z1.min(t.z0);
-                t.mask = [0; TH];
+            if empty {
+                t.mask = *cov;
+                t.z0 = zt;
+            } else if self.full(tx, ty, &merged) {
+                // The two layers fill the tile: the farther depth bounds every pixel, and
+                // the nearer of the two stays as the working layer.
+                t.z1 = t.z0.max(zt);
+                if zt < t.z0 {
+                    t.mask = *cov;
+                    t.z0 = zt;
+                } else if !(t.z0 < t.z1) {
+                    t.mask = [0; TH];
+                }
+            } else if zt <= t.z0 {
+                t.mask = merged;
+            } else if zt <= FAR_MERGE * t.z0 {
+                t.mask = merged;
+                t.z0 = zt;
             }
+            // Else the new coverage is far behind the working layer: merging would push
+            // the whole layer back (the discard heuristic of §3.2); it is dropped.
         }
         self.tiles[k] = t;
     }
