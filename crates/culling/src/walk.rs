@@ -58,8 +58,21 @@ pub fn is_free(scene: &Scene, p: DVec3, margin: f64) -> bool {
     true
 }
 
+/// Whether some block's bounding box lies within `dist_m` (horizontally) of `p`: a
+/// street, not the middle of a river or a park.
+pub fn near_building(scene: &Scene, p: DVec3, dist_m: f64) -> bool {
+    scene.objects.iter().any(|o| {
+        let b = o.bounds.xy();
+        let q = p.truncate().clamp(b.min, b.max);
+        q.distance(p.truncate()) <= dist_m && o.bounds.max.z > p.z
+    })
+}
+
+/// Streets: a walk stays within this distance of a building (metres).
+pub const STREET_M: f64 = 15.0;
+
 /// A deterministic street-level walk of `n` frames through `scene`: eye 1.5–2 m above
-/// the ground, 1 m or more from any building, stepping 3 m per frame and turning when a
+/// the ground, 1 m or more from any building and within [`STREET_M`] of one, stepping 3 m per frame and turning when a
 /// building or the scene's edge is ahead, looking roughly horizontally.
 pub fn street_walk(scene: &Scene, n: usize, seed: u64, fov_deg: f64) -> Vec<PathFrame> {
     let mut rng = Rng::new(seed);
@@ -75,7 +88,7 @@ pub fn street_walk(scene: &Scene, n: usize, seed: u64, fov_deg: f64) -> Vec<Path
                 rng.range(b.min.y, b.max.y),
                 rng.range(1.5, 2.0),
             );
-            if is_free(scene, p, 1.0) {
+            if is_free(scene, p, 1.0) && near_building(scene, p, STREET_M) {
                 return Some(p);
             }
         }
@@ -105,7 +118,7 @@ pub fn street_walk(scene: &Scene, n: usize, seed: u64, fov_deg: f64) -> Vec<Path
             let next = eye + DVec3::new(azimuth.cos(), azimuth.sin(), 0.0) * 3.0;
             let inside =
                 next.x > b.min.x && next.x < b.max.x && next.y > b.min.y && next.y < b.max.y;
-            if inside && is_free(scene, next, 1.0) {
+            if inside && is_free(scene, next, 1.0) && near_building(scene, next, STREET_M) {
                 eye = next;
                 moved = true;
                 break;
