@@ -165,10 +165,20 @@ impl Culler for Cplp {
             if cell.solidity >= self.opts.min_solidity {
                 for &o in &cell.occluders {
                     let o = &self.scene.occluders[o as usize];
-                    if !is_candidate(o.object)
-                        || box_in_view(view, o.lo, o.hi) == BoxInView::Outside
-                    {
+                    if !is_candidate(o.object) {
                         continue;
+                    }
+                    // Outside, or already hidden: it hides nothing more.
+                    match box_in_view(view, o.lo, o.hi) {
+                        BoxInView::Outside => continue,
+                        BoxInView::Rect {
+                            i0,
+                            j0,
+                            i1,
+                            j1,
+                            z_near,
+                        } if buf.rect_occluded(i0, j0, i1, j1, z_near) => continue,
+                        _ => {}
                     }
                     for f in o.front_faces(eye) {
                         frame.occluder_tris += f.tris as u64;

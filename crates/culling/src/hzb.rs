@@ -31,29 +31,46 @@ impl Hzb {
 }
 
 /// Draw the occluders of `scene` (only those of `allowed` objects when given) into a
-/// masked buffer for `frustum`; returns the buffer and the triangles drawn.
+/// masked buffer for `frustum`; returns the buffer and the triangles drawn. With
+/// `skip_hidden`, a prism whose box the buffer already hides is not drawn.
 pub fn draw_occluders(
     scene: &CullScene,
     frustum: &Frustum,
     allowed: Option<&[bool]>,
+    skip_hidden: bool,
 ) -> (MaskedBuffer, u64) {
     let view = frustum.view();
     let mut buf = MaskedBuffer::new(view.width_px, view.height_px);
-    let mut order: Vec<(f64, u32)> = Vec::new();
+    let mut order: Vec<(f64, u32, BoxInView)> = Vec::new();
     for (k, o) in scene.occluders.iter().enumerate() {
         if allowed.is_some_and(|a| !a[o.object as usize]) {
             continue;
         }
-        if box_in_view(view, o.lo, o.hi) == BoxInView::Outside {
+        let b = box_in_view(view, o.lo, o.hi);
+        if b == BoxInView::Outside {
             continue;
         }
         let d = frustum.eye.clamp(o.lo, o.hi).distance_squared(frustum.eye);
-        order.push((d, k as u32));
+        order.push((d, k as u32, b));
     }
     order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
     let mut tris = 0u64;
     let mut scratch = Vec::with_capacity(16);
-    for &(_, k) in &order {
+    for &(_, k, b) in &order {
+        // An occluder already hidden hides nothing that is not hidden already: drawn
+        // nearest first, most of a street's far prisms are skipped here.
+        if let BoxInView::Rect {
+            i0,
+            j0,
+            i1,
+            j1,
+            z_near,
+        } = b
+        {
+            if skip_hidden && buf.rect_occluded(i0, j0, i1, j1, z_near) {
+                continue;
+            }
+        }
         for f in scene.occluders[k as usize].front_faces(frustum.eye) {
             tris += f.tris as u64;
             if clip_project(view, &f.verts, &mut scratch) {
@@ -75,7 +92,7 @@ impl Culler for Hzb {
 
     fn cull(&self, frustum: &Frustum, candidates: Option<&[u32]>) -> Frame {
         let allowed = candidates.map(|c| crate::mask_of(c, self.scene.objects()));
-        let (mut buf, tris) = draw_occluders(&self.scene, frustum, allowed.as_deref());
+        let (mut buf, tris) = draw_occluders(&self.scene, frustum, allowed.as_deref(), true);
         buf.build_hierarchy();
         let mut frame = Frame::new(candidates.map_or(self.scene.objects(), |c| c.len()));
         frame.occluder_tris = tris;
