@@ -114,17 +114,34 @@ impl MaskedBuffer {
             return;
         }
         let (mut xmin, mut xmax, mut ymin, mut ymax) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-        let mut wmin = f64::MAX;
+        let (mut wmin, mut wmax) = (f64::MAX, 0f64);
         for p in v {
             xmin = xmin.min(p.x);
             xmax = xmax.max(p.x);
             ymin = ymin.min(p.y);
             ymax = ymax.max(p.y);
             wmin = wmin.min(p.w);
+            wmax = wmax.max(p.w);
         }
         let (wf, hf) = (self.width as f64, self.height as f64);
         if xmax <= 0.0 || ymax <= 0.0 || xmin >= wf || ymin >= hf || !(wmin > 0.0) {
             return;
+        }
+        // Early out: if every tile under the polygon's box is already nearer than the
+        // polygon's nearest point, no merge could change anything.
+        {
+            let z_near = (1.0 / wmax) as f32;
+            let tx0 = (xmin.max(0.0) as u32 / TILE_W).min(self.tiles_x - 1);
+            let tx1 = (xmax.min(wf - 1.0).max(0.0) as u32 / TILE_W).min(self.tiles_x - 1);
+            let ty0 = (ymin.max(0.0) as u32 / TILE_H).min(self.tiles_y - 1);
+            let ty1 = (ymax.min(hf - 1.0).max(0.0) as u32 / TILE_H).min(self.tiles_y - 1);
+            let hidden = (ty0..=ty1).all(|ty| {
+                let row = &self.tiles[(ty * self.tiles_x) as usize..][tx0 as usize..=tx1 as usize];
+                row.iter().all(|t| t.z1 <= z_near)
+            });
+            if hidden {
+                return;
+            }
         }
         // Plane w = w0 - (nx (x - x0) + ny (y - y0)) / nw, by Newell's method in (x, y, w).
         let (mut nx, mut ny, mut nw) = (0.0, 0.0, 0.0);
@@ -148,17 +165,34 @@ impl MaskedBuffer {
         if j0 > j1 {
             return;
         }
+        // Edges as (y_lo, y_hi, x at y_lo, dx/dy), lower endpoint first; horizontal
+        // edges as (y, y, x_min, x_max - x_min) flagged by `y_lo == y_hi`.
+        const MAX_EDGES: usize = 16;
+        if n > MAX_EDGES {
+            // Not produced by prism faces (at most 5 vertices after clipping); leaving an
+            // occluder out is conservative.
+            return;
+        }
+        let mut edges = [(0f64, 0f64, 0f64, 0f64); MAX_EDGES];
+        for (k, e) in edges.iter_mut().enumerate().take(n) {
+            let (a, b) = (v[k], v[(k + 1) % n]);
+            let (lo, hi) = if a.y <= b.y { (a, b) } else { (b, a) };
+            *e = if hi.y == lo.y {
+                (lo.y, hi.y, lo.x.min(hi.x), (lo.x - hi.x).abs())
+            } else {
+                (lo.y, hi.y, lo.x, (hi.x - lo.x) / (hi.y - lo.y))
+            };
+        }
+        let edges = &edges[..n];
         let chord = |y: f64| -> (f64, f64) {
             let (mut l, mut r) = (f64::MAX, f64::MIN);
-            for k in 0..n {
-                let (a, b) = (v[k], v[(k + 1) % n]);
-                let (lo, hi) = if a.y <= b.y { (a, b) } else { (b, a) };
-                if lo.y <= y && y <= hi.y {
-                    if hi.y == lo.y {
-                        l = l.min(lo.x.min(hi.x));
-                        r = r.max(lo.x.max(hi.x));
+            for &(ylo, yhi, x0, d) in edges {
+                if ylo <= y && y <= yhi {
+                    if yhi == ylo {
+                        l = l.min(x0);
+                        r = r.max(x0 + d);
                     } else {
-                        let x = lo.x + (y - lo.y) * ((hi.x - lo.x) / (hi.y - lo.y));
+                        let x = x0 + (y - ylo) * d;
                         l = l.min(x);
                         r = r.max(x);
                     }
