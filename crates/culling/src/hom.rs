@@ -12,7 +12,8 @@
 //!   block, the *farthest* depth of the occluders projecting there. An occludee that is
 //!   itself an occluder (every building of a city) then always has its own far faces in
 //!   the DEB and is never culled. Here the depth is estimated by *slices* instead: one
-//!   occlusion map per far bound `d_k` ([`DEPTH_SLICES_M`]) holds only the pixels covered
+//!   occlusion map per far bound `d_k` ([`slice_far_m`]: 4 m × 1.25^k, built on first
+//!   use) holds only the pixels covered
 //!   by occluders nearer than `d_k`, and an occludee whose nearest depth is at least
 //!   `d_k` is tested in map `k`. Occluder selection: those within
 //!   [`HomOptions::occluder_range_m`] of the eye (§5 of the paper selects nearby large
@@ -34,9 +35,17 @@ use crate::{Culler, Frame};
 use sightline_raster::{Framebuffer, ScreenVertex};
 use std::sync::Arc;
 
-/// Far bounds of the depth slices (metres): slice `k` holds the occluders nearer than
-/// `DEPTH_SLICES_M[k]`.
-pub const DEPTH_SLICES_M: [f64; 8] = [10.0, 20.0, 40.0, 80.0, 160.0, 320.0, 640.0, 1280.0];
+/// Far bound of the nearest depth slice (metres).
+pub const FIRST_SLICE_M: f64 = 4.0;
+/// Ratio of consecutive depth slices' far bounds.
+pub const SLICE_RATIO: f64 = 1.25;
+/// Number of depth slices (the last reaches past 3 km).
+pub const SLICES: usize = 30;
+
+/// Far bound of depth slice `k` (metres): slice `k` holds the occluders nearer than it.
+pub fn slice_far_m(k: usize) -> f64 {
+    FIRST_SLICE_M * SLICE_RATIO.powi(k as i32)
+}
 
 /// Knobs of the HOM culler.
 #[derive(Clone, Debug, PartialEq)]
@@ -221,12 +230,10 @@ impl Culler for Hom {
             fb.draw_screen_union(&refs, o.object);
         }
         // One occlusion map per depth slice: pixel opaque in slice k when covered by
-        // occluders all nearer than DEPTH_SLICES_M[k] (the pixel's inner-union depth is
+        // occluders all nearer than slice_far_m(k) (the pixel's inner-union depth is
         // an upper bound of them).
-        let pyramids: Vec<Pyramid> = DEPTH_SLICES_M
-            .iter()
-            .map(|&d| Pyramid::new(w, h, |i, j| (fb.depth_at(i, j) as f64) < d))
-            .collect();
+        // Built on first use: an occludee needs only the slice just in front of it.
+        let mut pyramids: Vec<Option<Pyramid>> = (0..SLICES).map(|_| None).collect();
         crate::for_candidates(self.scene.objects(), candidates, |id| {
             let (lo, hi) = self.scene.boxes[id as usize];
             match box_in_view(&view, lo, hi) {
@@ -240,9 +247,14 @@ impl Culler for Hom {
                     z_near,
                 } => {
                     // The farthest slice entirely in front of the occludee.
-                    let k = DEPTH_SLICES_M.iter().rposition(|&d| d <= z_near as f64);
+                    let k = (0..SLICES).rev().find(|&k| slice_far_m(k) <= z_near as f64);
                     let hidden = k.is_some_and(|k| {
-                        pyramids[k].rect_opaque([i0, j0, i1, j1], self.opts.opacity_threshold)
+                        let d = slice_far_m(k);
+                        pyramids[k]
+                            .get_or_insert_with(|| {
+                                Pyramid::new(w, h, |i, j| (fb.depth_at(i, j) as f64) < d)
+                            })
+                            .rect_opaque([i0, j0, i1, j1], self.opts.opacity_threshold)
                     });
                     if hidden {
                         frame.occlusion_culled += 1;
