@@ -2,7 +2,7 @@
 //! optional two-level culling inside the PVS of the eye's cell.
 
 use crate::cli::Command;
-use crate::common::{load_scene, print_json};
+use crate::common::{load_scene, print_json, progress};
 use anyhow::{bail, Context};
 use sightline_culling::walk::{street_walk, PathFrame};
 use sightline_culling::{method, CullScene, Frustum};
@@ -38,7 +38,7 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
+pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
     let Command::Frames {
         scene,
         path,
@@ -87,6 +87,7 @@ pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
     };
     let cs = Arc::new(CullScene::new(&sc));
     let culler = method(&name, cs)?;
+    let bar = progress(frames.len() as u64, quiet, "frames");
     let mut out = Vec::with_capacity(frames.len());
     let (mut ms_all, mut culled_all, mut second_all) = (Vec::new(), Vec::new(), Vec::new());
     for (k, pf) in frames.iter().enumerate() {
@@ -136,7 +137,9 @@ pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
             }
         }
         out.push(v);
+        bar.inc(1);
     }
+    bar.finish_and_clear();
     let n = out.len();
     if json {
         let mut report = serde_json::json!({
