@@ -132,7 +132,7 @@ impl Culler for Cplp {
         let eye = frustum.eye;
         let allowed = candidates.map(|c| crate::mask_of(c, self.scene.objects()));
         let is_candidate = |id: u32| allowed.as_ref().is_none_or(|a| a[id as usize]);
-        let mut frame = Frame::new(candidates.map_or(self.scene.objects(), |c| c.len()));
+        let mut frame = Frame::new(self.scene.objects(), candidates);
         let mut order: Vec<(f64, u32, BoxInView)> = Vec::new();
         for (k, c) in self.cells.iter().enumerate() {
             match box_in_view(view, c.lo, c.hi) {

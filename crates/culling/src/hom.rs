@@ -204,7 +204,7 @@ impl Culler for Hom {
         let view = frustum.view_at(w, h);
         let allowed = candidates.map(|c| crate::mask_of(c, self.scene.objects()));
         let mut fb = Framebuffer::new(w, h);
-        let mut frame = Frame::new(candidates.map_or(self.scene.objects(), |c| c.len()));
+        let mut frame = Frame::new(self.scene.objects(), candidates);
         let mut pieces: Vec<Vec<ScreenVertex>> = Vec::new();
         let mut scratch = Vec::with_capacity(16);
         let range2 = self.opts.occluder_range_m * self.opts.occluder_range_m;

@@ -94,7 +94,7 @@ impl Culler for Hzb {
         let allowed = candidates.map(|c| crate::mask_of(c, self.scene.objects()));
         let (mut buf, tris) = draw_occluders(&self.scene, frustum, allowed.as_deref(), true);
         buf.build_hierarchy();
-        let mut frame = Frame::new(candidates.map_or(self.scene.objects(), |c| c.len()));
+        let mut frame = Frame::new(self.scene.objects(), candidates);
         frame.occluder_tris = tris;
         crate::for_candidates(self.scene.objects(), candidates, |id| {
             let (lo, hi) = self.scene.boxes[id as usize];

@@ -78,7 +78,11 @@ pub struct Frame {
 }
 
 impl Frame {
-    fn new(candidates: usize) -> Frame {
+    /// An empty answer over `candidates` (ids out of `0..objects` are ignored).
+    fn new(objects: usize, candidates: Option<&[u32]>) -> Frame {
+        let candidates = candidates.map_or(objects, |c| {
+            c.iter().filter(|&&i| (i as usize) < objects).count()
+        });
         Frame {
             candidates,
             ..Frame::default()

@@ -66,5 +66,6 @@ fn odd_but_valid_frames_do_not_panic() {
         let f = Frustum::new(DVec3::new(0.0, 0.0, 1.7), DVec3::Y, 60.0, 64, 64).unwrap();
         let fr = c.cull(&f, Some(&[0, 99]));
         assert_eq!(fr.visible, vec![0]);
+        assert_eq!(fr.candidates, 1);
     }
 }
