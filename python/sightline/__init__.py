@@ -280,6 +280,33 @@ class Scene:
         )
         return [_ids(r) for r in raw]
 
+    def visible_from(
+        self,
+        eye: Sequence[float],
+        direction: Sequence[float],
+        fov_deg: float = 60.0,
+        width: int = 1920,
+        height: int = 1080,
+        method: str = "hzb",
+    ) -> np.ndarray:
+        """The objects that may be visible in one frame, by from-point occlusion culling:
+        sorted object ids (uint32). An object left out is hidden from ``eye`` within the
+        frustum (``hzb``, ``hom``, ``cplp``; ``hom-approx`` is not conservative).
+
+        >>> scene.visible_from([0, 0, 1.7], [0, 1, 0], fov_deg=60, method="hzb")  # doctest: +SKIP
+        array([ 0,  2, ...], dtype=uint32)
+        """
+        return _ids(
+            self._native.visible_from(
+                [float(c) for c in eye],
+                [float(c) for c in direction],
+                float(fov_deg),
+                int(width),
+                int(height),
+                method,
+            )
+        )
+
     def truth(self, cell: CellLike, samples: int | None = None, resolution: int | None = None) -> dict:
         """The sampled ground-truth visible set of one cell (``sightline truth --json``);
         ``"visible"`` is a uint32 array.

@@ -43,6 +43,15 @@ class NativeScene:
         threads: Optional[int] = None,
         knobs: List[Tuple[str, str]] = ...,
     ) -> List[bytes]: ...
+    def visible_from(
+        self,
+        eye: Sequence[float],
+        direction: Sequence[float],
+        fov_deg: float = 60.0,
+        width: int = 1920,
+        height: int = 1080,
+        method: str = "hzb",
+    ) -> bytes: ...
     def truth_json(
         self, cell: Sequence[float], samples: Optional[int] = None, resolution: Optional[int] = None
     ) -> str: ...

@@ -29,6 +29,8 @@ pub struct NativeScene {
     name: String,
     methods: Mutex<HashMap<MethodKey, Arc<dyn VisibilityMethod>>>,
     truth: OnceLock<Arc<TruthScene>>,
+    /// Occluders and occludees for from-point culling, prepared on first use.
+    culling: OnceLock<Arc<sightline_culling::CullScene>>,
 }
 
 fn crs(arg: Option<&str>) -> PyResult<Crs> {
@@ -192,6 +194,7 @@ impl NativeScene {
             name,
             methods: Mutex::new(HashMap::new()),
             truth: OnceLock::new(),
+            culling: OnceLock::new(),
         }
     }
 
@@ -313,6 +316,38 @@ impl NativeScene {
             })
         })?;
         Ok(PyBytes::new(py, &cells_to_bytes(&grid)))
+    }
+
+    /// The objects that may be visible in one frame (from-point culling: `hzb`, `hom`,
+    /// `hom-approx`, `cplp`), as little-endian `u32` bytes.
+    #[pyo3(signature = (eye, direction, fov_deg=60.0, width=1920, height=1080, method="hzb"))]
+    #[allow(clippy::too_many_arguments)]
+    fn visible_from<'py>(
+        &self,
+        py: Python<'py>,
+        eye: [f64; 3],
+        direction: [f64; 3],
+        fov_deg: f64,
+        width: u32,
+        height: u32,
+        method: &str,
+    ) -> PyResult<Bound<'py, PyBytes>> {
+        use sightline_geom::DVec3;
+        let frustum = sightline_culling::Frustum::new(
+            DVec3::from_array(eye),
+            DVec3::from_array(direction),
+            fov_deg,
+            width,
+            height,
+        )
+        .map_err(|e| err(Kind::Cell, e))?;
+        let scene = self
+            .culling
+            .get_or_init(|| Arc::new(sightline_culling::CullScene::new(&self.scene)))
+            .clone();
+        let culler = sightline_culling::method(method, scene).map_err(|e| err(Kind::Method, e))?;
+        let frame = detached(py, || Ok(culler.cull(&frustum, None)))?;
+        Ok(PyBytes::new(py, &ids_to_bytes(&frame.visible)))
     }
 
     /// The PVS of one cell, as little-endian `u32` bytes.

@@ -8,7 +8,7 @@ import pytest
 import sightline
 from sightline import CellError, MethodError, PvsFileError, SceneError, SightlineError
 
-from conftest import N, X0, Y0
+from conftest import BLOCK, N, STREET, X0, Y0
 
 
 def test_exception_hierarchy():
@@ -226,3 +226,19 @@ def test_build_bad_input(scene, tmp_path):
     with pytest.raises(PvsFileError, match="shard"):
         sightline.build(scene, scene.cells(10)[:2], "all", tmp_path / "e.pvs", shard="3/2")
     assert not (tmp_path / "e.pvs").exists()
+
+
+def test_visible_from_culls_conservatively(scene):
+    # From the street between the first two rows of blocks, looking along it (+x).
+    eye = [X0 - 5.0, Y0 + BLOCK + STREET / 2.0, 1.7]
+    for method in ("hzb", "hom", "cplp"):
+        ids = scene.visible_from(eye, [1.0, 0.0, 0.0], fov_deg=60, width=320, height=180, method=method)
+        assert ids.dtype == np.uint32
+        assert list(ids) == sorted(set(ids))
+        assert 0 < len(ids) < len(scene)
+    with pytest.raises(MethodError):
+        scene.visible_from(eye, [1, 0, 0], method="zbuffer")
+    with pytest.raises(CellError):
+        scene.visible_from(eye, [0, 0, 0])
+    with pytest.raises(CellError):
+        scene.visible_from([float("nan"), 0, 0], [1, 0, 0])

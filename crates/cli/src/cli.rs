@@ -296,6 +296,32 @@ pub enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// From-point occlusion culling along a camera path (SPEC §11): per frame the objects
+    /// that may be visible, with `hzb`, `hom`, `hom-approx` (not conservative) or `cplp`.
+    Frames {
+        #[command(flatten)]
+        scene: SceneArg,
+        /// Path file: JSON list of `{"eye": [x,y,z], "dir": [dx,dy,dz], "fov_deg": 60}`.
+        #[arg(long, conflicts_with = "walk", required_unless_present = "walk")]
+        path: Option<PathBuf>,
+        /// Instead of --path: a generated street-level walk of N frames.
+        #[arg(long)]
+        walk: Option<usize>,
+        /// Seed of --walk.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// A .pvs of this scene: each frame is culled within the PVS of the eye's cell
+        /// (two-level culling).
+        #[arg(long)]
+        pvs: Option<PathBuf>,
+        #[arg(long, default_value = "hzb")]
+        method: String,
+        /// Frame size `WIDTHxHEIGHT` in pixels.
+        #[arg(long, default_value = "1920x1080")]
+        size: String,
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]

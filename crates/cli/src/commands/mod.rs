@@ -6,6 +6,7 @@ mod build;
 mod cells;
 mod check;
 mod demo;
+mod frames;
 mod generate;
 mod info;
 mod map;
@@ -34,5 +35,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         c @ Command::Bench { .. } => bench::run(c, quiet),
         c @ Command::Serve { .. } => serve::run(c, quiet),
         c @ Command::Tiles { .. } => tiles::run(c, quiet),
+        c @ Command::Frames { .. } => frames::run(c, quiet),
     }
 }

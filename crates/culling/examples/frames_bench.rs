@@ -1,0 +1,245 @@
+//! Benchmark of the from-point cullers on street-level walks through real cities.
+//!
+//! `cargo run --release -p sightline-culling --example frames_bench -- [--frames N]
+//! [--size WxH] [--truth-every K] [SCENE ...]` (default: the project's Lyon and Den Haag
+//! extracts, 10,000 frames, 1920x1080). Reports per scene:
+//! * occluder triangles/s on one core: the masked tile rasterizer of `hzb` against the
+//!   full-resolution inner-union rasterizer of `sightline-raster`, same frames;
+//! * culled % of each method and of the full-resolution depth buffer of the same
+//!   occluders (the `sightline-raster` pyramid), and their ratio;
+//! * median / p90 ms per frame per method;
+//! * false culls against the item-buffer truth (on every K-th frame);
+//! * two-level culling: the frame culled within a conservative PVS stand-in (the `hzb`
+//!   answer of a wider frustum from the same eye), how much the second level removes.
+
+use glam::DVec3;
+use sightline_culling::frustum::{box_in_view, clip_project, BoxInView};
+use sightline_culling::hzb::draw_occluders;
+use sightline_culling::truth::FrameTruth;
+use sightline_culling::walk::street_walk;
+use sightline_culling::{method, CullScene, Frustum};
+use sightline_raster::{Framebuffer, ScreenVertex};
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+fn p90(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[(v.len() * 9 / 10).min(v.len() - 1)]
+}
+
+/// Full-resolution reference: every in-frustum prism's front faces drawn as one inner
+/// union into a per-pixel depth buffer, then the max-depth pyramid.
+fn full_res(cs: &CullScene, f: &Frustum) -> (Framebuffer, u64) {
+    let view = f.view();
+    let mut fb = Framebuffer::for_view(view);
+    let mut tris = 0;
+    let mut scratch = Vec::new();
+    let mut pieces: Vec<Vec<ScreenVertex>> = Vec::new();
+    for o in &cs.occluders {
+        if box_in_view(view, o.lo, o.hi) == BoxInView::Outside {
+            continue;
+        }
+        pieces.clear();
+        for face in o.front_faces(f.eye) {
+            tris += face.tris as u64;
+            if clip_project(view, &face.verts, &mut scratch) {
+                pieces.push(scratch.clone());
+            }
+        }
+        let refs: Vec<&[ScreenVertex]> = pieces.iter().map(|p| p.as_slice()).collect();
+        fb.draw_screen_union(&refs, o.object);
+    }
+    (fb, tris)
+}
+
+fn main() {
+    let mut frames = 10_000usize;
+    let (mut w, mut h) = (1920u32, 1080u32);
+    let mut truth_every = 50usize;
+    let mut full_every = 10usize;
+    let mut scenes: Vec<PathBuf> = Vec::new();
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            "--frames" => {
+                frames = args
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .expect("--frames N")
+            }
+            "--truth-every" => {
+                truth_every = args
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .expect("--truth-every K")
+            }
+            "--full-every" => {
+                full_every = args
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .expect("--full-every K")
+            }
+            "--size" => {
+                let s = args.next().expect("--size WxH");
+                let (a, b) = s.split_once('x').expect("--size WxH");
+                w = a.parse().expect("width");
+                h = b.parse().expect("height");
+            }
+            _ => scenes.push(PathBuf::from(a)),
+        }
+    }
+    if scenes.is_empty() {
+        let data = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data");
+        scenes = vec![
+            data.join("lyon1_bdtopo.geojson"),
+            data.join("denhaag_tile01_lod2.geojson"),
+        ];
+    }
+    println!("frames_bench: {frames} frames per scene, {w}x{h}, truth every {truth_every}, full-res every {full_every}; one thread");
+    for path in scenes {
+        let scene = sightline_scene::import::load(&path, &Default::default()).expect("scene loads");
+        let cs = Arc::new(CullScene::new(&scene));
+        let truth = FrameTruth::new(&scene);
+        let walk = street_walk(&scene, frames, 42, 60.0);
+        let names = ["hzb", "hom", "hom-approx", "cplp"];
+        let cullers: Vec<_> = names
+            .iter()
+            .map(|n| method(n, cs.clone()).unwrap())
+            .collect();
+        let mut ms = vec![Vec::new(); names.len()];
+        let mut culled = vec![0usize; names.len()];
+        let mut occl = vec![0usize; names.len()];
+        let mut false_culls = vec![0usize; names.len()];
+        let mut truth_frames = 0usize;
+        let (mut masked_tris, mut masked_s) = (0u64, 0.0f64);
+        let (mut full_tris, mut full_s) = (0u64, 0.0f64);
+        let (mut full_occl, mut hzb_occl_same) = (0usize, 0usize);
+        let (mut two_cand, mut two_vis) = (0usize, 0usize);
+        let mut total = 0usize;
+        let mut hzb_tris = 0u64;
+        for (k, pf) in walk.iter().enumerate() {
+            let f = Frustum::new(
+                DVec3::from_array(pf.eye),
+                DVec3::from_array(pf.dir),
+                pf.fov_deg,
+                w,
+                h,
+            )
+            .unwrap();
+            total += cs.objects();
+            let mut answers = Vec::new();
+            for (m, c) in cullers.iter().enumerate() {
+                let t0 = Instant::now();
+                let fr = c.cull(&f, None);
+                ms[m].push(t0.elapsed().as_secs_f64() * 1e3);
+                culled[m] += fr.candidates - fr.visible.len();
+                if m == 0 {
+                    hzb_tris += fr.occluder_tris;
+                }
+                occl[m] += fr.occlusion_culled;
+                answers.push(fr);
+            }
+            // Rasterizer throughput: every front face in the frustum (no skipping of
+            // hidden prisms), the same faces the full-resolution reference draws.
+            let t0 = Instant::now();
+            let (_buf, tris) = draw_occluders(&cs, &f, None, false);
+            masked_s += t0.elapsed().as_secs_f64();
+            masked_tris += tris;
+            if k % full_every == 0 {
+                let t0 = Instant::now();
+                let (fb, tris) = full_res(&cs, &f);
+                full_s += t0.elapsed().as_secs_f64();
+                full_tris += tris;
+                let pyr = fb.pyramid();
+                for (lo, hi) in &cs.boxes {
+                    if let BoxInView::Rect {
+                        i0,
+                        j0,
+                        i1,
+                        j1,
+                        z_near,
+                    } = box_in_view(f.view(), *lo, *hi)
+                    {
+                        if pyr.rect_occluded(i0, j0, i1, j1, z_near) {
+                            full_occl += 1;
+                        }
+                    }
+                }
+                hzb_occl_same += answers[0].occlusion_culled;
+            }
+            if k % truth_every == 0 {
+                truth_frames += 1;
+                let vs = truth.visible(&f);
+                for (m, fr) in answers.iter().enumerate() {
+                    false_culls[m] += vs
+                        .iter()
+                        .filter(|i| fr.visible.binary_search(i).is_err())
+                        .count();
+                }
+                // Two-level: the first level is a conservative set for the eye (the hzb
+                // answer of a 120° frustum around the same direction); the second culls
+                // the frame within it.
+                let wide = Frustum::new(f.eye, f.dir, 120.0, w, h).unwrap();
+                let first = cullers[0].cull(&wide, None).visible;
+                let second = cullers[0].cull(&f, Some(&first));
+                two_cand += first.len();
+                two_vis += second.visible.len();
+            }
+        }
+        println!(
+            "\n## {} ({} objects, {} occluder prisms, {} frames)",
+            path.display(),
+            cs.objects(),
+            cs.occluders.len(),
+            walk.len()
+        );
+        println!(
+            "occluder tris/s (one core): masked tiles {:.2} M ({} tris in {:.2} s); sightline-raster full-res union {:.3} M ({} tris in {:.2} s)",
+            masked_tris as f64 / masked_s / 1e6, masked_tris, masked_s,
+            full_tris as f64 / full_s.max(1e-9) / 1e6, full_tris, full_s
+        );
+        println!(
+            "hzb draws {:.0} occluder tris per frame (prisms already hidden are skipped) of {:.0} front-facing in the frustum",
+            hzb_tris as f64 / walk.len().max(1) as f64,
+            masked_tris as f64 / walk.len().max(1) as f64
+        );
+        println!(
+            "occlusion-culled on the full-res frames: hzb {} vs full-res depth buffer {} ({:.1} %)",
+            hzb_occl_same,
+            full_occl,
+            100.0 * hzb_occl_same as f64 / full_occl.max(1) as f64
+        );
+        println!("| method | conservative | culled % | occlusion-culled/frame | median ms | p90 ms | false culls / truth frames |");
+        println!("|---|---|---|---|---|---|---|");
+        for (m, c) in cullers.iter().enumerate() {
+            println!(
+                "| {} | {} | {:.1} | {:.1} | {:.2} | {:.2} | {} / {} |",
+                c.name(),
+                c.is_conservative(),
+                100.0 * culled[m] as f64 / total.max(1) as f64,
+                occl[m] as f64 / walk.len().max(1) as f64,
+                median(&mut ms[m]),
+                p90(&mut ms[m]),
+                false_culls[m],
+                truth_frames
+            );
+        }
+        println!(
+            "two-level (hzb, {} frames): first level {:.1} objects/frame, second keeps {:.1} ({:.1} % removed)",
+            truth_frames, two_cand as f64 / truth_frames.max(1) as f64, two_vis as f64 / truth_frames.max(1) as f64,
+            100.0 * (1.0 - two_vis as f64 / two_cand.max(1) as f64)
+        );
+    }
+}
