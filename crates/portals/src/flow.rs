@@ -95,16 +95,28 @@ struct Frame<'a> {
 pub fn flow(g: &Graph, p: usize, mightsee: &[Bits], done: &[Option<Bits>]) -> Bits {
     let base = &g.portals[p];
     let mut vis = Bits::new(g.portals.len());
+    let mut leaves = Bits::new(g.leaf_portals.len());
+    leaves.set(base.to as usize);
     let head = Frame {
         source: base.winding.clone(),
         pass: None,
         plane: base.plane,
         might: std::borrow::Cow::Borrowed(&mightsee[p]),
     };
-    recurse(g, base, base.to, &head, mightsee, done, &mut vis);
+    recurse(
+        g,
+        base,
+        base.to,
+        &head,
+        mightsee,
+        done,
+        &mut vis,
+        &mut leaves,
+    );
     vis
 }
 
+#[allow(clippy::too_many_arguments)]
 fn recurse(
     g: &Graph,
     base: &DirPortal,
@@ -113,52 +125,84 @@ fn recurse(
     mightsee: &[Bits],
     done: &[Option<Bits>],
     vis: &mut Bits,
+    leaves: &mut Bits,
 ) {
+    // The separating planes of this frame's source and pass, built once for all the
+    // leaf's portals (vis caches them the same way). They come from the source before
+    // it is clipped behind the next portal: a larger source, so planes that separate
+    // it from the pass separate every part of it too.
+    let mut seps: Option<Vec<Plane>> = None;
     for &q in &g.leaf_portals[leaf as usize] {
         let q = q as usize;
         if !prev.might.get(q) {
             continue;
         }
         let test = done[q].as_ref().unwrap_or(&mightsee[q]);
-        let mut might = Bits(Vec::with_capacity(test.0.len()));
-        let mut more = false;
-        for ((a, b), v) in prev.might.0.iter().zip(&test.0).zip(&vis.0) {
-            let m = a & b;
-            more |= m & !v != 0;
-            might.0.push(m);
-        }
-        if !more && vis.get(q) {
+        let more = prev
+            .might
+            .0
+            .iter()
+            .zip(&test.0)
+            .zip(&vis.0)
+            .any(|((a, b), v)| a & b & !v != 0);
+        let tp = &g.portals[q];
+        if !more && leaves.get(tp.to as usize) {
+            // Nothing new behind it, and its leaf is already seen: marked without the
+            // clipping (a superset, so the face pass still tests this pair).
+            vis.set(q);
             continue;
         }
-        let tp = &g.portals[q];
         // The next portal in front of the source portal.
         let Some(mut pass) = tp.winding.clip(&base.plane, ON_EPSILON) else {
             continue;
         };
         // The source behind the next portal.
-        let Some(source) = prev.source.clip(&tp.plane.flipped(), ON_EPSILON) else {
+        let Some(mut source) = prev.source.clip(&tp.plane.flipped(), ON_EPSILON) else {
             continue;
         };
         if let Some(prev_pass) = &prev.pass {
             let Some(w) = pass.clip(&prev.plane, ON_EPSILON) else {
                 continue;
             };
-            let Some(w) = clip_to_separators(&source, prev_pass, w, false) else {
-                continue;
-            };
-            let Some(w) = clip_to_separators(prev_pass, &source, w, true) else {
+            let seps = seps.get_or_insert_with(|| {
+                let mut v = separators(&prev.source, prev_pass, false);
+                v.extend(separators(prev_pass, &prev.source, true));
+                v
+            });
+            let mut w = Some(w);
+            for plane in seps.iter() {
+                w = w.and_then(|w| w.clip(plane, ON_EPSILON));
+            }
+            let Some(w) = w else {
                 continue;
             };
             pass = w;
+            // The same backwards: lines from the new pass through the previous one
+            // reach only part of the source (vis's tests 2 and 3).
+            let Some(src) = clip_to_separators(&pass, prev_pass, source, false)
+                .and_then(|s| clip_to_separators(prev_pass, &pass, s, true))
+            else {
+                continue;
+            };
+            source = src;
         }
         vis.set(q);
+        leaves.set(tp.to as usize);
+        let might = Bits(
+            prev.might
+                .0
+                .iter()
+                .zip(&test.0)
+                .map(|(a, b)| a & b)
+                .collect(),
+        );
         let frame = Frame {
             source,
             pass: Some(pass),
             plane: tp.plane,
             might: std::borrow::Cow::Owned(might),
         };
-        recurse(g, base, tp.to, &frame, mightsee, done, vis);
+        recurse(g, base, tp.to, &frame, mightsee, done, vis, leaves);
     }
 }
 

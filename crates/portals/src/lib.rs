@@ -291,9 +291,9 @@ impl Portals {
         }
         // A line reaching the face's front crosses its plane once, at the face: both
         // portals, which it passes before, lie in front of the face.
-        if !two_sided
-            && !(source.any_front(plane, -ON_EPSILON) && q.winding.any_front(plane, -ON_EPSILON))
-        {
+        let faces_viewer =
+            source.any_front(plane, -ON_EPSILON) && q.winding.any_front(plane, -ON_EPSILON);
+        if !(*two_sided || faces_viewer) {
             return false;
         }
         let Some(mut w) = w

@@ -32,10 +32,10 @@ impl Rng {
 
 /// Whether the segment `a`–`b` crosses only open leaves.
 pub fn segment_clear(level: &BspLevel, a: [f64; 3], b: [f64; 3]) -> bool {
-    clear(level, level.headnode, a, b, 0)
+    clear(level, level.headnode, a, b)
 }
 
-fn clear(level: &BspLevel, c: Child, a: [f64; 3], b: [f64; 3], depth: usize) -> bool {
+fn clear(level: &BspLevel, c: Child, a: [f64; 3], b: [f64; 3]) -> bool {
     match c {
         Child::Leaf(l) => level.leaves.get(l as usize).is_some_and(|l| l.is_open()),
         Child::Node(n) => {
@@ -43,16 +43,15 @@ fn clear(level: &BspLevel, c: Child, a: [f64; 3], b: [f64; 3], depth: usize) -> 
             let plane = &level.planes[node.plane as usize];
             let (da, db) = (plane.distance(a), plane.distance(b));
             if da >= 0.0 && db >= 0.0 {
-                return clear(level, node.children[0], a, b, depth + 1);
+                return clear(level, node.children[0], a, b);
             }
             if da < 0.0 && db < 0.0 {
-                return clear(level, node.children[1], a, b, depth + 1);
+                return clear(level, node.children[1], a, b);
             }
             let t = da / (da - db);
             let mid = [0, 1, 2].map(|k| a[k] + t * (b[k] - a[k]));
             let (near, far) = if da < 0.0 { (1, 0) } else { (0, 1) };
-            clear(level, node.children[near], a, mid, depth + 1)
-                && clear(level, node.children[far], mid, b, depth + 1)
+            clear(level, node.children[near], a, mid) && clear(level, node.children[far], mid, b)
         }
     }
 }

@@ -87,18 +87,37 @@ impl Winding {
     /// kept (`None` when nothing is left). A winding with no point more than `eps`
     /// behind is returned whole, one lying in the plane included: ties are kept.
     pub fn clip(&self, plane: &Plane, eps: f64) -> Option<Winding> {
-        let d: Vec<f64> = self.points.iter().map(|p| plane.distance(*p)).collect();
-        if d.iter().all(|&x| x >= -eps) {
+        let n = self.points.len();
+        let mut buf = [0.0f64; 64];
+        let mut heap = Vec::new();
+        let d: &mut [f64] = if n <= buf.len() {
+            &mut buf[..n]
+        } else {
+            heap.resize(n, 0.0);
+            &mut heap
+        };
+        let (mut any_out, mut any_in) = (false, false);
+        for (di, p) in d.iter_mut().zip(&self.points) {
+            *di = plane.distance(*p);
+            if *di < -eps {
+                any_out = true;
+            } else {
+                any_in = true;
+            }
+        }
+        if !any_out {
             return Some(self.clone());
         }
-        let n = self.points.len();
-        let mut out = Vec::with_capacity(n + 4);
+        if !any_in {
+            return None;
+        }
+        let mut out = Vec::with_capacity(n + 2);
         for i in 0..n {
             let (p, dp) = (self.points[i], d[i]);
             if dp >= -eps {
                 out.push(p);
             }
-            let j = (i + 1) % n;
+            let j = if i + 1 == n { 0 } else { i + 1 };
             let dq = d[j];
             // The edge crosses the kept boundary `d = -eps`.
             if (dp >= -eps) != (dq >= -eps) {
