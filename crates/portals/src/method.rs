@@ -7,7 +7,9 @@ use sightline_geom::ViewCell;
 use std::sync::OnceLock;
 
 /// `portals` or `portals-fast` prepared for one level; leaf PVS are computed on first
-/// use and kept.
+/// use and kept. `portals` answers a leaf from the flows of its own portals
+/// ([`Portals::solve_local`]: well under a second, no level-wide precomputation);
+/// [`Portals::solve_all`] is the tighter level-wide answer for whole-level builds.
 pub struct PortalMethod {
     portals: Portals,
     mode: Mode,

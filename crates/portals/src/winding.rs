@@ -10,6 +10,11 @@ use sightline_geom::DVec3;
 /// Distance (Quake units) within which a point counts as on a plane, as in qbsp and vis.
 pub const ON_EPSILON: f64 = 0.1;
 
+/// Distance below which a winding only touches a plane (float noise of the level's
+/// coordinates): a winding with no point further than this in front of a plane has
+/// nothing in front of it, only an edge or a point on it, which lines graze.
+pub const TOUCH_EPSILON: f64 = 0.001;
+
 /// The plane `normal · p = dist`; its front is where `normal · p > dist`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Plane {
@@ -84,8 +89,9 @@ impl Winding {
     }
 
     /// The part of the winding on the front of `plane`, points within `eps` behind it
-    /// kept (`None` when nothing is left). A winding with no point more than `eps`
-    /// behind is returned whole, one lying in the plane included: ties are kept.
+    /// kept; `None` when every point is more than [`TOUCH_EPSILON`] behind. A winding
+    /// with no point more than `eps` behind is returned whole, one lying in the plane
+    /// included: ties are kept.
     pub fn clip(&self, plane: &Plane, eps: f64) -> Option<Winding> {
         let n = self.points.len();
         let mut buf = [0.0f64; 64];
@@ -99,11 +105,8 @@ impl Winding {
         let (mut any_out, mut any_in) = (false, false);
         for (di, p) in d.iter_mut().zip(&self.points) {
             *di = plane.distance(*p);
-            if *di < -eps {
-                any_out = true;
-            } else {
-                any_in = true;
-            }
+            any_out |= *di < -eps;
+            any_in |= *di > -TOUCH_EPSILON;
         }
         if !any_out {
             return Some(self.clone());
@@ -132,9 +135,20 @@ impl Winding {
     }
 
     /// Both parts of the winding (front, back), each keeping the points within `eps`
-    /// of the plane: a winding near the plane goes to both sides.
+    /// of the plane, so that the two overlap. A side gets a part only if some point is
+    /// more than [`TOUCH_EPSILON`] on it (a winding that only touches the plane along
+    /// an edge has nothing on the other side); a winding lying in the plane goes to
+    /// both.
     pub fn split(&self, plane: &Plane, eps: f64) -> (Option<Winding>, Option<Winding>) {
-        (self.clip(plane, eps), self.clip(&plane.flipped(), eps))
+        let front = self.any_front(plane, TOUCH_EPSILON);
+        let back = self.any_back(plane, TOUCH_EPSILON);
+        if !front && !back {
+            return (Some(self.clone()), Some(self.clone()));
+        }
+        (
+            front.then(|| self.clip(plane, eps)).flatten(),
+            back.then(|| self.clip(&plane.flipped(), eps)).flatten(),
+        )
     }
 
     /// Whether some point is more than `eps` in front of `plane`.
