@@ -134,6 +134,13 @@ fn run_method(name: &str, scene: &Arc<Scene>, cells: &[ViewCell], quiet: bool) -
         hidden_fraction: None,
         ms_per_cell: None,
     };
+    if name
+        .parse::<sightline_core::Method>()
+        .is_ok_and(|m| m.family() == sightline_core::Family::Portals)
+    {
+        row.status = "skipped: BSP levels only".into();
+        return row;
+    }
     let method = match create(name, scene.clone(), &MethodOptions::default()) {
         Ok(m) => m,
         Err(e) => {
