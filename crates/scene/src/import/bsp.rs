@@ -652,7 +652,7 @@ mod tests {
         assert!(read_bsp(&v).unwrap_err().to_string().contains("version 30"));
         v[0] = 29;
         // Lump 1 beyond the end.
-        v[12] = 100;
+        v[12] = 200;
         assert!(read_bsp(&v).unwrap_err().to_string().contains("planes"));
         v[12] = 0;
         assert!(read_bsp(&v).unwrap_err().to_string().contains("model"));
