@@ -25,7 +25,7 @@ pub enum CrsArg {
 
 #[derive(Args, Debug, Clone)]
 pub struct SceneArg {
-    /// Scene file: .geojson, CityJSON (.json/.city.json/.zip), .osm.pbf, .obj, .gltf/.glb.
+    /// Scene file: .geojson, CityJSON (.json/.city.json/.zip), .osm.pbf, .obj, .gltf/.glb, .bsp (Quake).
     pub scene: PathBuf,
     /// Coordinate reference of the input (GeoJSON/OSM): detect, projected metres, or WGS84 lon/lat.
     #[arg(long, value_enum, default_value = "auto")]
@@ -128,8 +128,11 @@ pub enum Command {
         #[command(flatten)]
         scene: SceneArg,
         /// The viewcell `X0,Y0,Z0,X1,Y1,Z1`.
-        #[arg(long, value_parser = parse_cell, allow_hyphen_values = true)]
-        cell: ViewCell,
+        #[arg(long, value_parser = parse_cell, allow_hyphen_values = true, required_unless_present = "at")]
+        cell: Option<ViewCell>,
+        /// BSP levels with `portals`/`portals-fast`: the PVS of the leaf holding `X,Y,Z`.
+        #[arg(long, value_parser = parse_point, allow_hyphen_values = true, conflicts_with = "cell")]
+        at: Option<[f64; 3]>,
         /// The method (listed below).
         #[arg(long, default_value = "erosion")]
         method: String,

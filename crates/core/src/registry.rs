@@ -18,6 +18,8 @@ pub enum Family {
     ExtProj,
     /// The sampled visible set (survey §7.6): the ground truth, not conservative.
     Sampled,
+    /// Teller & Séquin 1991: cells and portals of a BSP level (`sightline-portals`).
+    Portals,
     /// No culling at all.
     Baseline,
 }
@@ -93,6 +95,11 @@ pub enum Method {
     DualRayExact,
     /// Extended projections with extended depth maps (Durand et al. 2000).
     ExtProj,
+    /// Leaf PVS through portal sequences a line can stab, faces no stabbing line
+    /// reaches dropped (Teller & Séquin 1991; BSP levels only).
+    Portals,
+    /// The cheap flood bound of `portals` (always contains it).
+    PortalsFast,
     /// The sampled visible set: aggressive, NOT conservative (the ground truth).
     Sampled,
     /// Every object: the no-culling baseline.
@@ -114,7 +121,7 @@ const NAMES: [&str; Method::ALL.len()] = {
 
 impl Method {
     /// Every method, in the order of the README's method table.
-    pub const ALL: [Method; 10] = [
+    pub const ALL: [Method; 12] = [
         Method::Erosion,
         Method::ErosionSegment,
         Method::ErosionCell,
@@ -123,6 +130,8 @@ impl Method {
         Method::DualRay,
         Method::DualRayExact,
         Method::ExtProj,
+        Method::Portals,
+        Method::PortalsFast,
         Method::Sampled,
         Method::All,
     ];
@@ -138,6 +147,8 @@ impl Method {
             Method::DualRay => "dual-ray",
             Method::DualRayExact => "dual-ray-exact",
             Method::ExtProj => "ext-proj",
+            Method::Portals => "portals",
+            Method::PortalsFast => "portals-fast",
             Method::Sampled => "sampled",
             Method::All => "all",
         }
@@ -153,6 +164,7 @@ impl Method {
             | Method::ErosionRays => Family::Erosion,
             Method::DualRay | Method::DualRayExact => Family::DualRay,
             Method::ExtProj => Family::ExtProj,
+            Method::Portals | Method::PortalsFast => Family::Portals,
             Method::Sampled => Family::Sampled,
             Method::All => Family::Baseline,
         }
@@ -169,6 +181,9 @@ impl Method {
             Method::DualRay => "Koltun, Chrysanthou & Cohen-Or 2001, §5.2",
             Method::DualRayExact => "Koltun, Chrysanthou & Cohen-Or 2001, §5.1",
             Method::ExtProj => "Durand, Drettakis, Thollot & Puech 2000",
+            Method::Portals | Method::PortalsFast => {
+                "Teller & Séquin 1991; the course's cells-and-portals part (Find_Visible_Cells)"
+            }
             Method::Sampled => "visibility survey §7.6 (aggressive sampling)",
             Method::All => "—",
         }
@@ -185,6 +200,8 @@ impl Method {
             Method::DualRay => "kd-tree of occludees tested cell-to-object in a discretized dual ray space",
             Method::DualRayExact => "the exact analytic planar dual-ray test (reference for dual-ray)",
             Method::ExtProj => "extended projections on six planes with extended depth maps (--sweep: occlusion sweep)",
+            Method::Portals => "BSP leaves and portals: leaf PVS through stabbable portal sequences (separating planes), faces no stabbing line reaches dropped",
+            Method::PortalsFast => "BSP leaves and portals: the cheap portal flood (front/back tests only), always contains portals",
             Method::Sampled => "the sampled visible set: NOT conservative, the ground truth",
             Method::All => "every object: the no-culling baseline",
         }
@@ -206,7 +223,7 @@ impl Method {
             },
             Family::ExtProj => &[RESOLUTION, SWEEP, PLANES],
             Family::Sampled => &[RESOLUTION, SAMPLES],
-            Family::Baseline => &[],
+            Family::Portals | Family::Baseline => &[],
         }
     }
 
@@ -267,7 +284,7 @@ impl Method {
                     samples: s.samples,
                 })
             }
-            Family::Baseline => Options::None,
+            Family::Portals | Family::Baseline => Options::None,
         };
         for (key, value) in &s.set {
             o.set(self, key, value).map_err(bad)?;

@@ -66,6 +66,9 @@ pub fn create(
         (Family::ExtProj, Options::ExtProj(o)) => ext_proj::create(m, scene, &o),
         (Family::Sampled, Options::Sampled(o)) => sampled::create(scene, &o),
         (Family::Baseline, _) => Ok(Box::new(All { scene })),
+        (Family::Portals, _) => Err(MethodError::Other(format!(
+            "{m} works on BSP levels: prepare it with sightline_portals::PortalMethod (the CLI does for a .bsp scene)"
+        ))),
         (_, o) => Err(MethodError::Other(format!(
             "{m}: options of another family ({o:?})"
         ))),

@@ -221,6 +221,10 @@ fn run_method(m: Method, scene: &Arc<Scene>, truths: &[Truth], quiet: bool) -> M
         hidden_fraction: None,
         ms_per_cell: None,
     };
+    if m.family() == sightline_core::Family::Portals {
+        row.status = "skipped: BSP levels only".into();
+        return row;
+    }
     let n = scene.objects.len();
     if m == Method::Sampled {
         // `sampled` with its default options is the truth just computed: not run twice.

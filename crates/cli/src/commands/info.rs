@@ -10,8 +10,29 @@ pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
     let scene = load_scene(&arg)?;
     let b = scene.bounds;
     let info = scene.info(arg.scene.display().to_string());
+    let bsp = if super::bsp::is_bsp(&arg.scene) {
+        Some(super::bsp::info(&arg.scene)?)
+    } else {
+        None
+    };
     if json {
-        return print_json(&info);
+        #[derive(serde::Serialize)]
+        struct WithBsp<'a, T: serde::Serialize> {
+            #[serde(flatten)]
+            info: &'a T,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            bsp: Option<&'a super::bsp::BspInfo>,
+        }
+        return print_json(&WithBsp {
+            info: &info,
+            bsp: bsp.as_ref(),
+        });
+    }
+    if let Some(b) = &bsp {
+        println!(
+            "BSP:       {} leaves ({} visleafs, {} open), {} portals",
+            b.leaves, b.visleafs, b.open_leaves, b.portals
+        );
     }
     println!("scene:     {}", info.scene);
     println!(

@@ -2,6 +2,7 @@
 //! `Command` variant.
 
 mod bench;
+mod bsp;
 mod build;
 mod cells;
 mod check;

@@ -21,6 +21,7 @@ pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
     let Command::Pvs {
         scene,
         cell,
+        at,
         method,
         resolution,
         sweep,
@@ -31,6 +32,17 @@ pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
         unreachable!("dispatched by commands::run")
     };
     let opts = method_options(&method, resolution, sweep, planes)?;
+    if let Some(mode) = crate::commands::bsp::portal_mode(&scene.scene, &method)? {
+        return crate::commands::bsp::pvs(&scene.scene, mode, cell, at, json);
+    }
+    if at.is_some() {
+        anyhow::bail!(
+            "--at answers for the leaf holding a point: it needs a .bsp level and --method portals or portals-fast"
+        );
+    }
+    let Some(cell) = cell else {
+        anyhow::bail!("--cell is required");
+    };
     pvs(&scene, &cell, &method, &opts, json)
 }
 

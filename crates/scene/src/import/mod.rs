@@ -6,6 +6,7 @@
 //! [`ImportError`] naming the feature and the problem. Nothing panics on bad input.
 //! See `docs/import.md` for the formats, conventions and warning kinds.
 
+pub mod bsp;
 pub mod cityjson;
 pub mod geojson;
 pub mod gltf;
@@ -53,7 +54,7 @@ pub enum ImportError {
     Format(String),
     #[error("feature {index}: {message}")]
     Feature { index: usize, message: String },
-    #[error("unsupported input format '{0}' (expected .geojson, .json, .city.json, .zip, .osm.pbf, .obj, .gltf, .glb)")]
+    #[error("unsupported input format '{0}' (expected .geojson, .json, .city.json, .zip, .osm.pbf, .obj, .gltf, .glb, .bsp)")]
     Unsupported(String),
 }
 
@@ -88,6 +89,7 @@ pub fn load(path: &Path, opts: &ImportOptions) -> Result<Scene, ImportError> {
         "obj" => obj::parse(&read(path)?, opts),
         "pbf" => osm::parse(&read(path)?, opts),
         "gltf" | "glb" => gltf::parse(&read(path)?, path.parent(), opts),
+        "bsp" => bsp::parse(&read(path)?),
         _ => Err(ImportError::Unsupported(path.display().to_string())),
     }
 }

@@ -1,0 +1,155 @@
+//! BSP levels (`.bsp`) with the portal methods: `pvs LEVEL.bsp --at X,Y,Z --method
+//! portals` and the leaf/portal counts of `info`.
+
+use crate::common::print_json;
+use anyhow::Context;
+use serde::Serialize;
+use sightline_core::{Method, VisibilityMethod};
+use sightline_geom::ViewCell;
+use sightline_portals::{Mode, PortalMethod, Portals};
+use sightline_scene::import::bsp::{load_bsp, BspLevel};
+use std::path::Path;
+use std::time::Instant;
+
+pub fn is_bsp(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("bsp"))
+}
+
+/// The portal mode when `scene` is a BSP level and `method` a portal method; an error
+/// for a portal method on another scene.
+pub fn portal_mode(scene: &Path, method: &str) -> anyhow::Result<Option<Mode>> {
+    let mode = match method.parse::<Method>() {
+        Ok(Method::Portals) => Mode::Full,
+        Ok(Method::PortalsFast) => Mode::Fast,
+        _ => return Ok(None),
+    };
+    if !is_bsp(scene) {
+        anyhow::bail!(
+            "{method} works on BSP levels (.bsp); {} is not one",
+            scene.display()
+        );
+    }
+    Ok(Some(mode))
+}
+
+fn level(path: &Path) -> anyhow::Result<BspLevel> {
+    load_bsp(path).with_context(|| format!("cannot load {}", path.display()))
+}
+
+fn prepare(level: &BspLevel) -> anyhow::Result<Portals> {
+    Portals::build(level).context("cannot build the level's portals")
+}
+
+#[derive(Serialize)]
+struct AtReport {
+    method: &'static str,
+    at: [f64; 3],
+    leaf: u32,
+    objects: usize,
+    visible: Vec<u32>,
+    visible_leaves: Vec<u32>,
+    seconds: f64,
+}
+
+#[derive(Serialize)]
+struct CellReport {
+    method: &'static str,
+    cell: ViewCell,
+    objects: usize,
+    visible: Vec<u32>,
+    seconds: f64,
+}
+
+/// `pvs LEVEL.bsp (--at X,Y,Z | --cell ...) --method portals|portals-fast`.
+pub fn pvs(
+    path: &Path,
+    mode: Mode,
+    cell: Option<ViewCell>,
+    at: Option<[f64; 3]>,
+    json: bool,
+) -> anyhow::Result<()> {
+    let level = level(path)?;
+    let objects = level.faces.len();
+    let t = Instant::now();
+    let m = PortalMethod::new(prepare(&level)?, mode);
+    if let Some(p) = at {
+        let leaf = level.point_leaf(p);
+        if !level.is_view_leaf(leaf) {
+            anyhow::bail!(
+                "point {},{},{} is not in open space (leaf {leaf} is solid, sky or outside the level)",
+                p[0],
+                p[1],
+                p[2]
+            );
+        }
+        let pvs = m.leaf_pvs(leaf);
+        let report = AtReport {
+            method: m.name(),
+            at: p,
+            leaf,
+            objects,
+            visible: pvs.faces,
+            visible_leaves: pvs.leaves,
+            seconds: t.elapsed().as_secs_f64(),
+        };
+        if json {
+            return print_json(&report);
+        }
+        println!(
+            "{}: leaf {leaf}: {} of {} faces and {} of {} leaves potentially visible ({:.1} ms)",
+            report.method,
+            report.visible.len(),
+            objects,
+            report.visible_leaves.len(),
+            level.visleafs,
+            report.seconds * 1e3
+        );
+        return Ok(());
+    }
+    let Some(cell) = cell else {
+        anyhow::bail!("give --at X,Y,Z or --cell X0,Y0,Z0,X1,Y1,Z1");
+    };
+    let visible = m.pvs(&cell)?;
+    let report = CellReport {
+        method: m.name(),
+        cell,
+        objects,
+        visible,
+        seconds: t.elapsed().as_secs_f64(),
+    };
+    if json {
+        return print_json(&report);
+    }
+    println!(
+        "{}: {} of {} faces potentially visible from {} ({:.1} ms)",
+        report.method,
+        report.visible.len(),
+        objects,
+        cell,
+        report.seconds * 1e3
+    );
+    Ok(())
+}
+
+/// Leaf and portal counts of a BSP level, for `info`.
+#[derive(Serialize)]
+pub struct BspInfo {
+    pub leaves: usize,
+    pub visleafs: u32,
+    pub open_leaves: usize,
+    pub portals: usize,
+}
+
+pub fn info(path: &Path) -> anyhow::Result<BspInfo> {
+    let level = level(path)?;
+    let portals = prepare(&level)?;
+    Ok(BspInfo {
+        leaves: level.leaves.len(),
+        visleafs: level.visleafs,
+        open_leaves: (1..=level.visleafs)
+            .filter(|&l| level.is_view_leaf(l))
+            .count(),
+        portals: portals.portals().len(),
+    })
+}

@@ -1,0 +1,285 @@
+//! Visibility through portal sequences, after the course's `Find_Visible_Cells` and
+//! its practical form in Quake's `vis` (ericw-tools' `RecursiveLeafFlow`).
+//!
+//! Every portal is used in both directions; a directed portal leads from leaf `from`
+//! into leaf `to` and its plane's normal points into `to`.
+//!
+//! 1. **Base flood** ([`might_see`], `Mode::Fast`): from a source portal, flood the leaf
+//!    graph through the portals that lie (partly) in front of it and that it lies
+//!    (partly) behind. Any sight line through a sequence of portals crosses each one
+//!    forwards, so every portal of the sequence passes these two tests against the
+//!    source: the flood holds every portal any line through the source can reach.
+//! 2. **Flow** (`Mode::Full`): depth-first over portal sequences from the source
+//!    portal, restricted to the flood. The source winding is clipped behind each
+//!    portal passed, the next portal in front of the source and the previous one, and
+//!    by the *separating planes* of the source and the last portal passed (planes
+//!    through an edge of one and a vertex of the other with the two on opposite
+//!    sides): a line through both crosses such a plane once, between them, so beyond
+//!    the pass it stays on the pass's side. A sequence is pruned only when a winding
+//!    becomes empty, and clipping keeps points within `ON_EPSILON` of each plane:
+//!    ties count as visible.
+//!
+//! Faces: a face of a leaf reached through portal `q` from source portal `p` is kept
+//! when a line through `p` then `q` can reach its front: it has a point in front of
+//! both portals, both portals have a point in front of it (or it is a two-sided
+//! liquid surface), and the separating planes of `p` and `q` leave some of it.
+
+use crate::bits::Bits;
+use crate::winding::{Plane, Winding, ON_EPSILON};
+
+/// Tolerance of the cheap front/back tests of the base flood: a portal counts as in
+/// front if some point is more than this in front (a hair, not vis's 0.1).
+pub const FLOOD_EPSILON: f64 = 0.001;
+
+/// A portal used in one direction.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DirPortal {
+    pub winding: Winding,
+    /// Normal pointing into `to`.
+    pub plane: Plane,
+    pub from: u32,
+    pub to: u32,
+}
+
+/// The portal graph of a level: directed portals and each leaf's outgoing ones.
+pub struct Graph {
+    pub portals: Vec<DirPortal>,
+    pub leaf_portals: Vec<Vec<u32>>,
+}
+
+/// Base flood of every directed portal: the portals a line through it might reach.
+pub fn might_see(g: &Graph, p: usize) -> Bits {
+    let n = g.portals.len();
+    let base = &g.portals[p];
+    let mut front = Bits::new(n);
+    for (q, tp) in g.portals.iter().enumerate() {
+        if q == p {
+            continue;
+        }
+        if !tp.winding.any_front(&base.plane, FLOOD_EPSILON) {
+            continue;
+        }
+        if !base.winding.any_back(&tp.plane, FLOOD_EPSILON) {
+            continue;
+        }
+        front.set(q);
+    }
+    let mut flood = Bits::new(n);
+    let mut stack = vec![base.to];
+    let mut seen_leaf = std::collections::HashSet::new();
+    seen_leaf.insert(base.to);
+    while let Some(leaf) = stack.pop() {
+        for &q in &g.leaf_portals[leaf as usize] {
+            let q = q as usize;
+            if front.get(q) && !flood.get(q) {
+                flood.set(q);
+                if seen_leaf.insert(g.portals[q].to) {
+                    stack.push(g.portals[q].to);
+                }
+            }
+        }
+    }
+    flood
+}
+
+struct Frame<'a> {
+    source: Winding,
+    pass: Option<Winding>,
+    plane: Plane,
+    might: std::borrow::Cow<'a, Bits>,
+}
+
+/// The portals visible through directed portal `p` by flow (a subset of `mightsee[p]`);
+/// `done[q]`, when known, is portal `q`'s own flow result, a tighter bound than its
+/// flood for what lies behind it.
+pub fn flow(g: &Graph, p: usize, mightsee: &[Bits], done: &[Option<Bits>]) -> Bits {
+    let base = &g.portals[p];
+    let mut vis = Bits::new(g.portals.len());
+    let mut leaves = Bits::new(g.leaf_portals.len());
+    leaves.set(base.to as usize);
+    let head = Frame {
+        source: base.winding.clone(),
+        pass: None,
+        plane: base.plane,
+        might: std::borrow::Cow::Borrowed(&mightsee[p]),
+    };
+    recurse(
+        g,
+        base,
+        base.to,
+        &head,
+        mightsee,
+        done,
+        &mut vis,
+        &mut leaves,
+    );
+    vis
+}
+
+#[allow(clippy::too_many_arguments)]
+fn recurse(
+    g: &Graph,
+    base: &DirPortal,
+    leaf: u32,
+    prev: &Frame,
+    mightsee: &[Bits],
+    done: &[Option<Bits>],
+    vis: &mut Bits,
+    leaves: &mut Bits,
+) {
+    // The separating planes of this frame's source and pass, built once for all the
+    // leaf's portals (vis caches them the same way). They come from the source before
+    // it is clipped behind the next portal: a larger source, so planes that separate
+    // it from the pass separate every part of it too.
+    let mut seps: Option<Vec<Plane>> = None;
+    for &q in &g.leaf_portals[leaf as usize] {
+        let q = q as usize;
+        if !prev.might.get(q) {
+            continue;
+        }
+        let test = done[q].as_ref().unwrap_or(&mightsee[q]);
+        let more = prev
+            .might
+            .0
+            .iter()
+            .zip(&test.0)
+            .zip(&vis.0)
+            .any(|((a, b), v)| a & b & !v != 0);
+        let tp = &g.portals[q];
+        if !more && leaves.get(tp.to as usize) {
+            // Nothing new behind it, and its leaf is already seen: marked without the
+            // clipping (a superset, so the face pass still tests this pair).
+            vis.set(q);
+            continue;
+        }
+        // The next portal in front of the source portal.
+        let Some(mut pass) = tp.winding.clip(&base.plane, ON_EPSILON) else {
+            continue;
+        };
+        // The source behind the next portal.
+        let Some(mut source) = prev.source.clip(&tp.plane.flipped(), ON_EPSILON) else {
+            continue;
+        };
+        if let Some(prev_pass) = &prev.pass {
+            let Some(w) = pass.clip(&prev.plane, ON_EPSILON) else {
+                continue;
+            };
+            let seps = seps.get_or_insert_with(|| {
+                let mut v = separators(&prev.source, prev_pass, false);
+                v.extend(separators(prev_pass, &prev.source, true));
+                v
+            });
+            let mut w = Some(w);
+            for plane in seps.iter() {
+                w = w.and_then(|w| w.clip(plane, ON_EPSILON));
+            }
+            let Some(w) = w else {
+                continue;
+            };
+            pass = w;
+            // The same backwards: lines from the new pass through the previous one
+            // reach only part of the source (vis's tests 2 and 3).
+            let Some(src) = clip_to_separators(&pass, prev_pass, source, false)
+                .and_then(|s| clip_to_separators(prev_pass, &pass, s, true))
+            else {
+                continue;
+            };
+            source = src;
+        }
+        vis.set(q);
+        leaves.set(tp.to as usize);
+        let might = Bits(
+            prev.might
+                .0
+                .iter()
+                .zip(&test.0)
+                .map(|(a, b)| a & b)
+                .collect(),
+        );
+        let frame = Frame {
+            source,
+            pass: Some(pass),
+            plane: tp.plane,
+            might: std::borrow::Cow::Owned(might),
+        };
+        recurse(g, base, tp.to, &frame, mightsee, done, vis, leaves);
+    }
+}
+
+/// The separating planes of `source` and `pass`: through an edge of `source` and a
+/// vertex of `pass`, with `source` behind and `pass` (strictly, bar ties) in front.
+/// With `flip`, the planes face the other way (for planes built from the pass's edges
+/// and the source's vertices). Returned so that a target beyond `pass` must keep its
+/// front part.
+pub fn separators(source: &Winding, pass: &Winding, flip: bool) -> Vec<Plane> {
+    let mut out = Vec::new();
+    let (ns, np) = (source.points.len(), pass.points.len());
+    for i in 0..ns {
+        let l = (i + 1) % ns;
+        let v1 = source.points[l] - source.points[i];
+        for j in 0..np {
+            let v2 = pass.points[j] - source.points[i];
+            let normal = v1.cross(v2);
+            let len = normal.length();
+            if len < ON_EPSILON {
+                continue;
+            }
+            let normal = normal / len;
+            let mut plane = Plane::new(normal, normal.dot(pass.points[j]));
+            // Which side holds the source (a convex polygon lies on one side of a plane
+            // through one of its edges; the first point off the plane tells which).
+            let mut side = 0.0;
+            for (k, sp) in source.points.iter().enumerate() {
+                if k == i || k == l {
+                    continue;
+                }
+                let d = plane.distance(*sp);
+                if d.abs() > ON_EPSILON {
+                    side = d;
+                    break;
+                }
+            }
+            if side == 0.0 {
+                continue; // in the source's plane
+            }
+            if side > 0.0 {
+                plane = plane.flipped();
+            }
+            // A separating plane has the whole pass in front (ties allowed only to a
+            // hair, so that it truly separates) and some of it clearly in front.
+            let mut clear = false;
+            let mut separates = true;
+            for (k, pp) in pass.points.iter().enumerate() {
+                if k == j {
+                    continue;
+                }
+                let d = plane.distance(*pp);
+                if d < -FLOOD_EPSILON {
+                    separates = false;
+                    break;
+                }
+                clear |= d > ON_EPSILON;
+            }
+            if !separates || !clear {
+                continue;
+            }
+            out.push(if flip { plane.flipped() } else { plane });
+        }
+    }
+    out
+}
+
+/// `target` clipped by the separating planes of `source` and `pass` (see
+/// [`separators`]); `None` when nothing is left.
+pub fn clip_to_separators(
+    source: &Winding,
+    pass: &Winding,
+    target: Winding,
+    flip: bool,
+) -> Option<Winding> {
+    let mut t = target;
+    for plane in separators(source, pass, flip) {
+        t = t.clip(&plane, ON_EPSILON)?;
+    }
+    Some(t)
+}

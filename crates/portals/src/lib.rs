@@ -1,0 +1,313 @@
+//! Cells and portals for BSP levels: the leaves of a compiled Quake tree are the cells,
+//! the openings between open leaves the portals, and a leaf sees another only through
+//! a sequence of portals that a line can stab — Teller & Séquin, "Visibility
+//! preprocessing for interactive walkthroughs" (SIGGRAPH 1991), in the form of the
+//! visibility course's `Find_Visible_Cells(cell, portal sequence, visible set)`, with
+//! stabbing tested by separating planes as Quake's `vis` does (see [`flow`]).
+//!
+//! Guarantee: a leaf or face is reported hidden from a leaf only if no line from a
+//! point of the leaf reaches it through open space (solid and sky block, liquids do
+//! not); ties, grazing lines and slivers thinner than `ON_EPSILON` count as visible.
+//!
+//! * [`winding`] — convex polygons clipped by planes, erring towards keeping;
+//! * [`portalize`] — portals from the tree, as qbsp builds them;
+//! * [`flow`] — the base flood (`portals-fast`) and the flow through portal sequences
+//!   with separating planes (`portals`), and the face test;
+//! * [`oracle`] — rays through the tree, independent of the above, for the tests.
+//!
+//! ```
+//! use sightline_portals::{Mode, Portals};
+//! use sightline_portals::testlevel::two_rooms;
+//! let level = two_rooms(2.0);
+//! let portals = Portals::build(&level).unwrap();
+//! let room = level.point_leaf([-50.0, 0.0, 0.0]);
+//! let pvs = portals.solve(room, Mode::Full);
+//! assert!(pvs.leaves.contains(&level.point_leaf([50.0, 0.0, 0.0])));
+//! ```
+
+pub mod bits;
+pub mod flow;
+pub mod method;
+pub mod oracle;
+pub mod portalize;
+pub mod testlevel;
+pub mod winding;
+
+pub use method::PortalMethod;
+
+use bits::Bits;
+use flow::{DirPortal, Graph};
+use portalize::Portal;
+use rayon::prelude::*;
+use sightline_geom::DVec3;
+use sightline_scene::import::bsp::BspLevel;
+use winding::{Plane, Winding, ON_EPSILON};
+
+/// Which bound to compute.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Mode {
+    /// Flow through portal sequences with separating planes (`portals`).
+    Full,
+    /// The base flood only (`portals-fast`): cheaper, always contains `Full`.
+    Fast,
+}
+
+/// The PVS of one leaf: leaves and world faces, each sorted ascending.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct LeafPvs {
+    pub leaf: u32,
+    pub leaves: Vec<u32>,
+    pub faces: Vec<u32>,
+}
+
+/// Why a level could not be prepared.
+#[derive(Debug, thiserror::Error)]
+pub enum PortalError {
+    #[error("the level has no open leaves")]
+    Empty,
+}
+
+/// The portals of a level, ready to answer leaf PVS queries.
+pub struct Portals {
+    level: BspLevel,
+    portals: Vec<Portal>,
+    graph: Graph,
+    /// Base flood of each directed portal.
+    mightsee: Vec<Bits>,
+    /// Each face's polygon and front plane; two-sided liquid surfaces flagged.
+    faces: Vec<(Winding, Plane, bool)>,
+    /// Flow result of every directed portal, computed on first use.
+    flows: std::sync::OnceLock<Vec<Bits>>,
+}
+
+impl Portals {
+    /// Portalize `level` and flood every portal.
+    pub fn build(level: &BspLevel) -> Result<Portals, PortalError> {
+        if !(1..=level.visleafs).any(|l| level.is_view_leaf(l)) {
+            return Err(PortalError::Empty);
+        }
+        let portals = portalize::portalize(level);
+        let mut dir = Vec::with_capacity(2 * portals.len());
+        let mut leaf_portals = vec![Vec::new(); level.leaves.len()];
+        for p in &portals {
+            let [a, b] = p.leaves;
+            leaf_portals[a as usize].push(dir.len() as u32);
+            dir.push(DirPortal {
+                winding: p.winding.clone(),
+                plane: p.plane,
+                from: a,
+                to: b,
+            });
+            leaf_portals[b as usize].push(dir.len() as u32);
+            let mut rev = p.winding.points.clone();
+            rev.reverse();
+            dir.push(DirPortal {
+                winding: Winding::new(rev),
+                plane: p.plane.flipped(),
+                from: b,
+                to: a,
+            });
+        }
+        let graph = Graph {
+            portals: dir,
+            leaf_portals,
+        };
+        let mightsee = (0..graph.portals.len())
+            .into_par_iter()
+            .map(|p| flow::might_see(&graph, p))
+            .collect();
+        let faces = level
+            .faces
+            .iter()
+            .map(|f| {
+                let bp = level.planes[f.plane as usize];
+                let mut plane = Plane::new(DVec3::from(bp.normal), bp.dist);
+                if f.back {
+                    plane = plane.flipped();
+                }
+                let w = Winding::new(f.polygon.iter().map(|p| DVec3::from(*p)).collect());
+                (w, plane, f.texture.starts_with('*'))
+            })
+            .collect();
+        Ok(Portals {
+            level: level.clone(),
+            portals,
+            graph,
+            mightsee,
+            faces,
+            flows: std::sync::OnceLock::new(),
+        })
+    }
+
+    pub fn level(&self) -> &BspLevel {
+        &self.level
+    }
+
+    /// The undirected portals between open leaves.
+    pub fn portals(&self) -> &[Portal] {
+        &self.portals
+    }
+
+    /// The portal graph (each portal in both directions).
+    pub fn graph(&self) -> &Graph {
+        &self.graph
+    }
+
+    /// The PVS of one leaf. `Mode::Full` runs the flow of every portal of the level
+    /// on first use (each portal's flow bounds the flows that pass through it, as in
+    /// vis), then answers from it.
+    pub fn solve(&self, leaf: u32, mode: Mode) -> LeafPvs {
+        let vis = self.portal_sets(mode);
+        self.leaf_pvs(leaf, vis, mode)
+    }
+
+    /// The PVS of one leaf from the flows of its own portals alone, each bounded only
+    /// by the base floods: no level-wide precomputation, looser than [`Portals::solve`]
+    /// and still conservative.
+    pub fn solve_local(&self, leaf: u32) -> LeafPvs {
+        let n = self.graph.portals.len();
+        let none = vec![None; n];
+        let mut vis = vec![Bits::new(0); n];
+        if let Some(out) = self.graph.leaf_portals.get(leaf as usize) {
+            for &p in out {
+                vis[p as usize] = flow::flow(&self.graph, p as usize, &self.mightsee, &none);
+            }
+        }
+        self.leaf_pvs(leaf, &vis, Mode::Full)
+    }
+
+    /// The PVS of every leaf `0 ..= visleafs`, in leaf order (leaf 0 and other
+    /// closed leaves see only themselves).
+    pub fn solve_all(&self, mode: Mode) -> Vec<LeafPvs> {
+        let vis = self.portal_sets(mode);
+        (0..=self.level.visleafs)
+            .into_par_iter()
+            .map(|leaf| self.leaf_pvs(leaf, vis, mode))
+            .collect()
+    }
+
+    /// The portals seen through each directed portal: its base flood (`Fast`) or its
+    /// flow (`Full`).
+    pub fn portal_sets(&self, mode: Mode) -> &[Bits] {
+        match mode {
+            Mode::Fast => &self.mightsee,
+            Mode::Full => self.flows.get_or_init(|| self.flow_all()),
+        }
+    }
+
+    fn flow_all(&self) -> Vec<Bits> {
+        let n = self.graph.portals.len();
+        // Portals with the smallest floods first, in waves: a finished portal's flow
+        // bounds what later flows can see behind it (vis's `stat_done`).
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by_key(|&p| (self.mightsee[p].count(), p));
+        let mut done: Vec<Option<Bits>> = vec![None; n];
+        let wave = 64.max(n / 256);
+        for chunk in order.chunks(wave) {
+            let results: Vec<Bits> = chunk
+                .par_iter()
+                .map(|&p| flow::flow(&self.graph, p, &self.mightsee, &done))
+                .collect();
+            for (&p, r) in chunk.iter().zip(results) {
+                done[p] = Some(r);
+            }
+        }
+        done.into_iter()
+            .map(|d| d.unwrap_or_else(|| Bits::new(n)))
+            .collect()
+    }
+
+    fn leaf_pvs(&self, leaf: u32, vis: &[Bits], mode: Mode) -> LeafPvs {
+        let v: Vec<(u32, &Bits)> = self
+            .graph
+            .leaf_portals
+            .get(leaf as usize)
+            .map(|out| out.iter().map(|&p| (p, &vis[p as usize])).collect())
+            .unwrap_or_default();
+        self.assemble(leaf, &v, mode)
+    }
+
+    /// Leaves and faces of `leaf` from the portal sets of its outgoing portals.
+    fn assemble(&self, leaf: u32, vis: &[(u32, &Bits)], mode: Mode) -> LeafPvs {
+        let level = &self.level;
+        let mut leaves = Bits::new(level.leaves.len());
+        let mut faces = Bits::new(level.faces.len());
+        let mark_all = |faces: &mut Bits, l: u32| {
+            for &f in &level.leaves[l as usize].faces {
+                faces.set(f as usize);
+            }
+        };
+        leaves.set(leaf as usize);
+        mark_all(&mut faces, leaf);
+        for (p, v) in vis {
+            let pp = &self.graph.portals[*p as usize];
+            leaves.set(pp.to as usize);
+            mark_all(&mut faces, pp.to);
+            for q in v.ones() {
+                let qp = &self.graph.portals[q];
+                leaves.set(qp.to as usize);
+                let lf = &level.leaves[qp.to as usize].faces;
+                if lf.iter().all(|&f| faces.get(f as usize)) {
+                    continue;
+                }
+                if mode == Mode::Fast {
+                    mark_all(&mut faces, qp.to);
+                    continue;
+                }
+                // Lines through p then q: p's part behind q, separating planes of both.
+                let Some(source) = pp.winding.clip(&qp.plane.flipped(), ON_EPSILON) else {
+                    continue;
+                };
+                let mut seps = flow::separators(&source, &qp.winding, false);
+                seps.extend(flow::separators(&qp.winding, &source, true));
+                for &f in lf {
+                    if faces.get(f as usize) {
+                        continue;
+                    }
+                    if self.face_reachable(&source, pp, qp, &seps, f as usize) {
+                        faces.set(f as usize);
+                    }
+                }
+            }
+        }
+        LeafPvs {
+            leaf,
+            leaves: leaves.ones().map(|l| l as u32).collect(),
+            faces: faces.ones().map(|f| f as u32).collect(),
+        }
+    }
+
+    fn face_reachable(
+        &self,
+        source: &Winding,
+        p: &DirPortal,
+        q: &DirPortal,
+        seps: &[Plane],
+        f: usize,
+    ) -> bool {
+        let (w, plane, two_sided) = &self.faces[f];
+        if w.len() < 3 {
+            return false;
+        }
+        // A line reaching the face's front crosses its plane once, at the face: both
+        // portals, which it passes before, lie in front of the face.
+        let faces_viewer =
+            source.any_front(plane, -ON_EPSILON) && q.winding.any_front(plane, -ON_EPSILON);
+        if !(*two_sided || faces_viewer) {
+            return false;
+        }
+        let Some(mut w) = w
+            .clip(&p.plane, ON_EPSILON)
+            .and_then(|w| w.clip(&q.plane, ON_EPSILON))
+        else {
+            return false;
+        };
+        for s in seps {
+            match w.clip(s, ON_EPSILON) {
+                Some(c) => w = c,
+                None => return false,
+            }
+        }
+        true
+    }
+}
