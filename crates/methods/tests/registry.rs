@@ -2,8 +2,8 @@
 //! name, knobs given by key reach the method and the `.pvs` header (only the switches
 //! that change the PVS, and only when not at their defaults), bad knobs are errors.
 
-use sightline_geom::{DVec2, Polygon};
 use sightline_core::Family;
+use sightline_geom::{DVec2, Polygon};
 use sightline_methods::{create, Method, MethodError, MethodOptions};
 use sightline_scene::{Object, Scene};
 use std::sync::Arc;
