@@ -44,9 +44,15 @@ pub fn methods_help() -> String {
         .map(|m| m.name().len())
         .max()
         .unwrap_or(0);
-    let mut s = String::from("Methods (--method):\n");
+    let mut s = String::from("Methods (--method; [keys for --set KEY=VALUE]):\n");
     for m in Method::ALL {
-        s.push_str(&format!("  {:width$}  {}\n", m.name(), m.summary()));
+        let keys: Vec<&str> = m.knobs().iter().map(|k| k.key).collect();
+        let keys = if keys.is_empty() {
+            String::new()
+        } else {
+            format!(" [{}]", keys.join(", "))
+        };
+        s.push_str(&format!("  {:width$}  {}{keys}\n", m.name(), m.summary()));
     }
     s
 }
@@ -144,6 +150,10 @@ pub enum Command {
         /// ext-proj --sweep: number of sweep planes per direction (default 15, §7.2).
         #[arg(long)]
         planes: Option<u32>,
+        /// Any knob of the method by key, repeatable (`--set virtual_occluders=true`; the
+        /// keys each method takes are listed below).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
         #[arg(long)]
         json: bool,
     },
@@ -178,6 +188,10 @@ pub enum Command {
         /// ext-proj --sweep: number of sweep planes per direction (default 15, §7.2).
         #[arg(long)]
         planes: Option<u32>,
+        /// Any knob of the method by key, repeatable (`--set virtual_occluders=true`; the
+        /// keys each method takes are listed below).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
         #[arg(short, long)]
         out: PathBuf,
         /// Continue an interrupted build from its journal.
@@ -224,6 +238,10 @@ pub enum Command {
         /// ext-proj --sweep: number of sweep planes per direction (default 15, §7.2).
         #[arg(long)]
         planes: Option<u32>,
+        /// Any knob of the method by key, repeatable (`--set virtual_occluders=true`; the
+        /// keys each method takes are listed below).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
         #[arg(long)]
         json: bool,
     },

@@ -68,6 +68,7 @@ pub fn method_options(
     resolution: Option<u32>,
     sweep: bool,
     planes: Option<u32>,
+    set: &[String],
 ) -> anyhow::Result<sightline_methods::MethodOptions> {
     if sweep && method != "ext-proj" {
         anyhow::bail!("--sweep only applies to --method ext-proj (got '{method}')");
@@ -80,12 +81,28 @@ pub fn method_options(
             anyhow::bail!("--planes must be between 1 and 256, got {k}");
         }
     }
-    Ok(sightline_methods::MethodOptions {
+    let set = set
+        .iter()
+        .map(|kv| match kv.split_once('=') {
+            Some((k, v)) if !k.trim().is_empty() => {
+                Ok((k.trim().to_string(), v.trim().to_string()))
+            }
+            _ => anyhow::bail!("--set takes KEY=VALUE, got '{kv}'"),
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let opts = sightline_methods::MethodOptions {
         resolution_px: resolution,
         sweep,
         planes,
+        set,
         ..Default::default()
-    })
+    };
+    // The registry validates every knob by key (an unknown method is reported later,
+    // where the method is prepared, with the list of names).
+    if let Ok(m) = method.parse::<sightline_methods::Method>() {
+        m.options(&opts)?;
+    }
+    Ok(opts)
 }
 
 #[cfg(test)]
@@ -94,7 +111,7 @@ mod tests {
 
     #[test]
     fn sweep_options_reach_ext_proj_and_only_it() {
-        let o = method_options("ext-proj", Some(128), true, Some(5)).unwrap();
+        let o = method_options("ext-proj", Some(128), true, Some(5), &[]).unwrap();
         assert!(o.sweep);
         assert_eq!(o.planes, Some(5));
         assert_eq!(o.resolution_px, Some(128));
@@ -102,11 +119,15 @@ mod tests {
         assert!(p.sweep);
         assert_eq!(p.sweep_planes, 5);
         // Refused rather than silently ignored.
-        let e = method_options("erosion", None, true, None).unwrap_err();
+        let e = method_options("erosion", None, true, None, &[]).unwrap_err();
         assert!(e.to_string().contains("ext-proj"), "{e}");
-        let e = method_options("ext-proj", None, false, Some(5)).unwrap_err();
+        let e = method_options("ext-proj", None, false, Some(5), &[]).unwrap_err();
         assert!(e.to_string().contains("--sweep"), "{e}");
-        assert!(method_options("ext-proj", None, true, Some(0)).is_err());
-        assert!(!method_options("erosion", None, false, None).unwrap().sweep);
+        assert!(method_options("ext-proj", None, true, Some(0), &[]).is_err());
+        assert!(
+            !method_options("erosion", None, false, None, &[])
+                .unwrap()
+                .sweep
+        );
     }
 }

@@ -342,3 +342,58 @@ fn check_runs_the_sweep_from_the_cli() {
         assert!(stderr(&o).starts_with("error:"), "{args:?}: {}", stderr(&o));
     }
 }
+
+#[test]
+fn set_gives_knobs_by_key_and_refuses_bad_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let city = dir.path().join("city.geojson");
+    let o = sightline(&[
+        "generate",
+        "city",
+        "--seed",
+        "2",
+        "--size",
+        "60",
+        "-o",
+        path(&city),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let cell = "--cell=0,0,1.5,20,20,2";
+    let ids = |extra: &[&str]| -> Vec<u64> {
+        let mut args = vec!["pvs", path(&city), cell, "--method", "dual-ray", "--json"];
+        args.extend_from_slice(extra);
+        let o = sightline(&args);
+        assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        v["visible"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_u64().unwrap())
+            .collect()
+    };
+    let base = ids(&[]);
+    let vo = ids(&[
+        "--set",
+        "virtual_occluders=true",
+        "--set",
+        "seed_rays=false",
+    ]);
+    // Virtual occluders can only remove hidden objects.
+    assert!(vo.iter().all(|i| base.contains(i)));
+    for bad in ["nope=1", "hidden_boxes=maybe", "novalue"] {
+        let o = sightline(&[
+            "pvs",
+            path(&city),
+            cell,
+            "--method",
+            "dual-ray",
+            "--set",
+            bad,
+        ]);
+        assert!(!o.status.success(), "{bad}");
+        let e = stderr(&o);
+        assert_eq!(e.trim().lines().count(), 1, "{bad}: {e}");
+        assert!(e.starts_with("error:"), "{bad}: {e}");
+    }
+}

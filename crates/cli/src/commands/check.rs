@@ -43,6 +43,7 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         resolution,
         sweep,
         planes,
+        set,
         json,
     } = cmd
     else {
@@ -52,6 +53,9 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
     let (m, cells): (Box<dyn VisibilityMethod>, Vec<ViewCell>) = if let Some(file) = pvs {
         if sweep || planes.is_some() {
             bail!("--sweep and --planes are options of --method ext-proj, not of a .pvs file");
+        }
+        if !set.is_empty() {
+            bail!("--set sets knobs of a --method, not of a .pvs file");
         }
         // `check SCENE city.pvs --cells K`: K cells sampled evenly from the file.
         let f = PvsFile::open(&file).with_context(|| format!("cannot open {}", file.display()))?;
@@ -77,7 +81,7 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         };
         let cells_arg = cells.unwrap_or_else(|| "20".to_string());
         let cells = read_cells(&cells_arg, &sc)?;
-        let opts = method_options(&method, resolution, sweep, planes)?;
+        let opts = method_options(&method, resolution, sweep, planes, &set)?;
         let m = create(&method, sc.clone(), &opts)?;
         (m, cells)
     };

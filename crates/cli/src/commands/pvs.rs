@@ -26,12 +26,13 @@ pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
         resolution,
         sweep,
         planes,
+        set,
         json,
     } = cmd
     else {
         unreachable!("dispatched by commands::run")
     };
-    let opts = method_options(&method, resolution, sweep, planes)?;
+    let opts = method_options(&method, resolution, sweep, planes, &set)?;
     if let Some(mode) = crate::commands::bsp::portal_mode(&scene.scene, &method)? {
         return crate::commands::bsp::pvs(&scene.scene, mode, cell, at, json);
     }
