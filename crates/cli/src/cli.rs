@@ -175,8 +175,10 @@ pub enum Command {
     Build {
         #[command(flatten)]
         scene: SceneArg,
+        /// A cells.json of viewcells (not needed for a .bsp level with a portal method:
+        /// every open leaf is stored).
         #[arg(long)]
-        cells: PathBuf,
+        cells: Option<PathBuf>,
         /// The method (listed below).
         #[arg(long, default_value = "erosion")]
         method: String,

@@ -75,3 +75,95 @@ fn bsp_errors_and_info() {
     assert_eq!(v["bsp"]["visleafs"], 434);
     assert!(v["bsp"]["portals"].as_u64().unwrap() > 1000);
 }
+
+#[test]
+fn build_and_query_a_level_by_its_leaves() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("dm1.pvs");
+    let out_s = out.to_string_lossy().into_owned();
+    let (code, _, err) = sightline(&[
+        "build",
+        &dm1(),
+        "--method",
+        "portals-fast",
+        "-o",
+        &out_s,
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let level = sightline_scene::import::bsp::load_bsp(std::path::Path::new(&dm1())).unwrap();
+    let file = sightline_pvs::PvsFile::open(&out).unwrap();
+    assert_eq!(file.header().method, "portals-fast");
+    let open = (1..=level.visleafs)
+        .filter(|&l| level.is_view_leaf(l))
+        .count();
+    assert_eq!(file.cells().len(), open);
+    // Point location by the leaves' shapes agrees with the tree's on random points of
+    // the level (points within a hair of a node plane may belong to either side).
+    let (lo, hi) = (level.bounds.min, level.bounds.max);
+    let mut x = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        (x >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let (mut inside, mut checked) = (0, 0);
+    for _ in 0..4000 {
+        let p = [
+            lo.x + next() * (hi.x - lo.x),
+            lo.y + next() * (hi.y - lo.y),
+            lo.z + next() * (hi.z - lo.z),
+        ];
+        let near_plane = level
+            .nodes
+            .iter()
+            .any(|n| level.planes[n.plane as usize].distance(p).abs() < 1e-3);
+        if near_plane {
+            continue;
+        }
+        checked += 1;
+        let leaf = level.point_leaf(p);
+        let found = file.locate(sightline_geom::DVec3::from_array(p));
+        if level.is_view_leaf(leaf) {
+            inside += 1;
+            let i = found.unwrap_or_else(|| panic!("{p:?} in leaf {leaf}: no cell"));
+            assert_eq!(file.cell(i).and_then(|c| c.id()), Some(leaf), "{p:?}");
+        } else {
+            assert_eq!(found, None, "{p:?} in closed leaf {leaf}");
+        }
+    }
+    assert!(checked > 3000 && inside > 100, "{checked} {inside}");
+    // `query --at` answers the leaf with the same faces as `pvs --at`.
+    let p = open_point();
+    let at = format!("{},{},{}", p[0], p[1], p[2]);
+    let (code, q, err) = sightline(&["query", &out_s, "--at", &at, "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let (code, v, err) = sightline(&[
+        "pvs",
+        &dm1(),
+        "--at",
+        &at,
+        "--method",
+        "portals-fast",
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let q: serde_json::Value = serde_json::from_str(&q).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&v).unwrap();
+    assert_eq!(q["leaf"], v["leaf"]);
+    assert_eq!(q["visible"], v["visible"]);
+    // A cells file, shards or resume make no sense for a level: one-line errors.
+    let (code, _, err) = sightline(&[
+        "build",
+        &dm1(),
+        "--method",
+        "portals",
+        "--cells",
+        "x.json",
+        "-o",
+        &out_s,
+    ]);
+    assert_ne!(code, 0);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+}

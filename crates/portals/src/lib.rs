@@ -26,6 +26,7 @@
 //! ```
 
 pub mod bits;
+pub mod cells;
 pub mod flow;
 pub mod method;
 pub mod oracle;
@@ -33,6 +34,7 @@ pub mod portalize;
 pub mod testlevel;
 pub mod winding;
 
+pub use cells::leaf_cells;
 pub use method::PortalMethod;
 
 use bits::Bits;

@@ -153,3 +153,57 @@ pub fn info(path: &Path) -> anyhow::Result<BspInfo> {
         portals: portals.portals().len(),
     })
 }
+
+/// `build LEVEL.bsp --method portals|portals-fast -o L.pvs`: the face PVS of every open
+/// leaf, each leaf stored as its convex cell (`query --at` locates by the leaf's shape).
+pub fn build(path: &Path, mode: Mode, out: &Path, quiet: bool) -> anyhow::Result<()> {
+    let level = level(path)?;
+    let scene = level.to_scene();
+    let t = Instant::now();
+    let portals = prepare(&level)?;
+    let method = match mode {
+        Mode::Full => Method::Portals,
+        Mode::Fast => Method::PortalsFast,
+    };
+    let cells = sightline_portals::leaf_cells(&level);
+    anyhow::ensure!(!cells.is_empty(), "{} has no open leaf", path.display());
+    let all = portals.solve_all(mode);
+    let sets: Vec<roaring::RoaringBitmap> = cells
+        .iter()
+        .map(|c| {
+            let leaf = c.id().unwrap_or(0) as usize;
+            all.get(leaf)
+                .map(|p| p.faces.iter().copied().collect())
+                .unwrap_or_default()
+        })
+        .collect();
+    let header = sightline_pvs::Header::new(
+        scene.fingerprint(),
+        method.name(),
+        Vec::new(),
+        scene.objects.len(),
+        cells.len(),
+    );
+    let present: Vec<u32> = (0..cells.len() as u32).collect();
+    let bytes = sightline_pvs::format::encode_cells(
+        &header,
+        &cells,
+        &present,
+        &sets,
+        &sightline_pvs::format::EncodeOptions::default(),
+    )?;
+    sightline_pvs::build::write_atomic(out, &bytes)
+        .with_context(|| format!("cannot write {}", out.display()))?;
+    if !quiet {
+        eprintln!(
+            "wrote {}: {} leaves, method {}, {} bytes ({:.0} B/leaf), {:.1} s",
+            out.display(),
+            cells.len(),
+            method.name(),
+            bytes.len(),
+            bytes.len() as f64 / cells.len() as f64,
+            t.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}

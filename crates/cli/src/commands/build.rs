@@ -25,16 +25,31 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
             out,
             resume,
             shard,
-        } => run_build(
-            &scene,
-            &cells,
-            &method,
-            method_options(&method, resolution, sweep, planes, &set)?,
-            &out,
-            resume,
-            shard.as_deref(),
-            quiet,
-        ),
+        } => {
+            let opts = method_options(&method, resolution, sweep, planes, &set)?;
+            if let Some(mode) = crate::commands::bsp::portal_mode(&scene.scene, &method)? {
+                anyhow::ensure!(
+                    cells.is_none() && shard.is_none() && !resume,
+                    "a .bsp level is built whole, every open leaf a cell: no --cells, --shard or --resume"
+                );
+                return crate::commands::bsp::build(&scene.scene, mode, &out, quiet);
+            }
+            let Some(cells) = cells else {
+                anyhow::bail!(
+                    "--cells is required (a cells.json of viewcells; `sightline cells` writes one)"
+                );
+            };
+            run_build(
+                &scene,
+                &cells,
+                &method,
+                opts,
+                &out,
+                resume,
+                shard.as_deref(),
+                quiet,
+            )
+        }
         Command::Merge { inputs, out } => run_merge(&inputs, &out),
         Command::Query { pvs, at, json } => run_query(&pvs, at, json),
         _ => unreachable!("dispatched by commands::run"),
@@ -134,6 +149,9 @@ fn run_merge(inputs: &[PathBuf], out: &Path) -> anyhow::Result<()> {
 #[derive(Serialize)]
 struct QueryReport {
     cell: ViewCell,
+    /// The cell's number in its source when it is not a box (a BSP leaf).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    leaf: Option<u32>,
     index: usize,
     method: String,
     visible: Vec<u32>,
@@ -156,6 +174,7 @@ fn run_query(path: &Path, at: [f64; 3], json: bool) -> anyhow::Result<()> {
         .with_context(|| format!("cannot read cell {index} of {}", path.display()))?;
     let report = QueryReport {
         cell: file.cells()[index],
+        leaf: file.cell(index).and_then(|c| c.id()),
         index,
         method: file.header().method.clone(),
         visible,
@@ -164,6 +183,9 @@ fn run_query(path: &Path, at: [f64; 3], json: bool) -> anyhow::Result<()> {
         print_json(&report)
     } else {
         let c = report.cell.to_array();
+        if let Some(l) = report.leaf {
+            print!("leaf {l}, ");
+        }
         println!(
             "cell {index} [{}, {}, {}, {}, {}, {}] ({}): {} of {} objects visible",
             c[0],
