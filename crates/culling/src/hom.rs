@@ -104,24 +104,24 @@ impl Pyramid {
                 count.push(opaque(i, j) as u32);
             }
         }
-        let mut levels = vec![(w, h, count, vec![1; (w * h) as usize])];
-        loop {
-            let (c, r, ref cnt, ref area) = *levels.last().expect("level 0");
-            if c <= 1 && r <= 1 {
-                break;
-            }
-            let (nc, nr) = (c.div_ceil(2), r.div_ceil(2));
-            let mut ncnt = vec![0u32; (nc * nr) as usize];
-            let mut narea = vec![0u32; (nc * nr) as usize];
-            for y in 0..r {
-                for x in 0..c {
-                    let k = ((y / 2) * nc + x / 2) as usize;
-                    ncnt[k] += cnt[(y * c + x) as usize];
-                    narea[k] += area[(y * c + x) as usize];
-                }
-            }
-            levels.push((nc, nr, ncnt, narea));
-        }
+        // Exact counts of opaque and on-screen pixels per block, by the raster crate's
+        // one pyramid reduction (pixels past the edges count 0 in both).
+        let n = count.len();
+        let sums = |base: Vec<u32>| {
+            sightline_raster::Pyramid::<u32, sightline_raster::Sum>::new(
+                w as usize,
+                h as usize,
+                base,
+                0,
+                usize::MAX,
+            )
+            .into_levels()
+        };
+        let levels = sums(count)
+            .into_iter()
+            .zip(sums(vec![1; n]))
+            .map(|(c, a)| (c.width as u32, c.height as u32, c.data, a.data))
+            .collect();
         Pyramid { levels }
     }
 
@@ -235,34 +235,18 @@ impl Culler for Hom {
         // Built on first use: an occludee needs only the slice just in front of it.
         let mut pyramids: Vec<Option<Pyramid>> = (0..SLICES).map(|_| None).collect();
         crate::for_candidates(self.scene.objects(), candidates, |id| {
-            let (lo, hi) = self.scene.boxes[id as usize];
-            match box_in_view(&view, lo, hi) {
-                BoxInView::Outside => frame.frustum_culled += 1,
-                BoxInView::CrossesNear => frame.visible.push(id),
-                BoxInView::Rect {
-                    i0,
-                    j0,
-                    i1,
-                    j1,
-                    z_near,
-                } => {
-                    // The farthest slice entirely in front of the occludee.
-                    let k = (0..SLICES).rev().find(|&k| slice_far_m(k) <= z_near as f64);
-                    let hidden = k.is_some_and(|k| {
-                        let d = slice_far_m(k);
-                        pyramids[k]
-                            .get_or_insert_with(|| {
-                                Pyramid::new(w, h, |i, j| (fb.depth_at(i, j) as f64) < d)
-                            })
-                            .rect_opaque([i0, j0, i1, j1], self.opts.opacity_threshold)
-                    });
-                    if hidden {
-                        frame.occlusion_culled += 1;
-                    } else {
-                        frame.visible.push(id);
-                    }
-                }
-            }
+            frame.test_box(&view, id, self.scene.boxes[id as usize], |rect, z_near| {
+                // The farthest slice entirely in front of the occludee.
+                let k = (0..SLICES).rev().find(|&k| slice_far_m(k) <= z_near as f64);
+                k.is_some_and(|k| {
+                    let d = slice_far_m(k);
+                    pyramids[k]
+                        .get_or_insert_with(|| {
+                            Pyramid::new(w, h, |i, j| (fb.depth_at(i, j) as f64) < d)
+                        })
+                        .rect_opaque(rect, self.opts.opacity_threshold)
+                })
+            });
         });
         frame.finish();
         frame

@@ -97,24 +97,12 @@ impl Culler for Hzb {
         let mut frame = Frame::new(self.scene.objects(), candidates);
         frame.occluder_tris = tris;
         crate::for_candidates(self.scene.objects(), candidates, |id| {
-            let (lo, hi) = self.scene.boxes[id as usize];
-            match box_in_view(frustum.view(), lo, hi) {
-                BoxInView::Outside => frame.frustum_culled += 1,
-                BoxInView::CrossesNear => frame.visible.push(id),
-                BoxInView::Rect {
-                    i0,
-                    j0,
-                    i1,
-                    j1,
-                    z_near,
-                } => {
-                    if buf.rect_occluded(i0, j0, i1, j1, z_near) {
-                        frame.occlusion_culled += 1;
-                    } else {
-                        frame.visible.push(id);
-                    }
-                }
-            }
+            frame.test_box(
+                frustum.view(),
+                id,
+                self.scene.boxes[id as usize],
+                |[i0, j0, i1, j1], z| buf.rect_occluded(i0, j0, i1, j1, z),
+            );
         });
         frame.finish();
         frame

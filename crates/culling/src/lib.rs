@@ -94,6 +94,35 @@ impl Frame {
         self.visible.dedup();
     }
 
+    /// Record occludee `id` (its box `[lo, hi]`) as culled by the frustum, visible
+    /// (crossing the near plane), or, on screen, as `hidden(rect, z_near)` decides from
+    /// its outer screen rectangle `[i0, j0, i1, j1]` and the lower bound of its depth.
+    fn test_box(
+        &mut self,
+        view: &sightline_raster::View,
+        id: u32,
+        (lo, hi): (glam::DVec3, glam::DVec3),
+        hidden: impl FnOnce([u32; 4], f32) -> bool,
+    ) {
+        match frustum::box_in_view(view, lo, hi) {
+            frustum::BoxInView::Outside => self.frustum_culled += 1,
+            frustum::BoxInView::CrossesNear => self.visible.push(id),
+            frustum::BoxInView::Rect {
+                i0,
+                j0,
+                i1,
+                j1,
+                z_near,
+            } => {
+                if hidden([i0, j0, i1, j1], z_near) {
+                    self.occlusion_culled += 1;
+                } else {
+                    self.visible.push(id);
+                }
+            }
+        }
+    }
+
     /// Percentage of the candidates culled (frustum and occlusion).
     pub fn culled_pct(&self) -> f64 {
         if self.candidates == 0 {

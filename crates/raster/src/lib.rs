@@ -49,7 +49,7 @@ pub mod view;
 pub use coverage::EPS_PX;
 pub use framebuffer::{Framebuffer, NO_ID};
 use glam::DVec3;
-pub use pyramid::{DepthPyramid, Keep, Level, Max, Mean, Min, Pyramid};
+pub use pyramid::{DepthPyramid, Keep, Level, Max, Mean, Min, Pyramid, Sum};
 use rayon::prelude::*;
 use sightline_geom::Polygon;
 pub use view::{Face, ScreenVertex, View};

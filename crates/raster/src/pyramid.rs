@@ -31,6 +31,9 @@ pub struct Min;
 /// The mean of a block (a hierarchical occlusion map's opacity, Zhang et al. 1997).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Mean;
+/// The sum of a block (exact opacity as counts of opaque pixels; outside gives 0).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Sum;
 
 impl Keep<f32> for Max {
     #[inline(always)]
@@ -48,6 +51,12 @@ impl Keep<f32> for Mean {
     #[inline(always)]
     fn combine(a: f32, b: f32) -> f32 {
         0.5 * (a + b)
+    }
+}
+impl Keep<u32> for Sum {
+    #[inline(always)]
+    fn combine(a: u32, b: u32) -> u32 {
+        a + b
     }
 }
 impl Keep<u16> for Max {
