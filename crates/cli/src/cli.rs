@@ -244,6 +244,10 @@ pub enum Command {
         /// keys each method takes are listed below).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
+        /// A .bsp level with a portal method: compare with the level's own PVS (`vis`)
+        /// and the ray oracle (--cells K: K source leaves for the oracle, default 20).
+        #[arg(long, value_parser = ["vis"])]
+        reference: Option<String>,
         #[arg(long)]
         json: bool,
     },

@@ -167,3 +167,31 @@ fn build_and_query_a_level_by_its_leaves() {
     assert_ne!(code, 0);
     assert_eq!(err.trim().lines().count(), 1, "{err}");
 }
+
+#[test]
+fn check_a_level_against_its_own_vis_and_the_oracle() {
+    let (code, out, err) = sightline(&[
+        "check",
+        &dm1(),
+        "--method",
+        "portals-fast",
+        "--reference",
+        "vis",
+        "--cells",
+        "12",
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["visleafs"], 434);
+    assert_eq!(v["sources"], 12);
+    assert_eq!(v["missed_pairs"], 0);
+    assert_eq!(v["reference_only_clear"], 0);
+    // The flood bound holds vis's rows (vis is conservative too, and tighter).
+    assert!(v["leaves_ours"].as_u64().unwrap() >= v["leaves_reference"].as_u64().unwrap());
+    assert!(v["faces_ours"].as_u64().unwrap() > 0);
+    // --reference belongs to a level with a portal method.
+    let (code, _, err) = sightline(&["check", &dm1(), "--method", "erosion", "--reference", "vis"]);
+    assert_ne!(code, 0);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+}

@@ -31,6 +31,7 @@ pub mod flow;
 pub mod method;
 pub mod oracle;
 pub mod portalize;
+pub mod reference;
 pub mod testlevel;
 pub mod winding;
 

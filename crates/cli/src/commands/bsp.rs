@@ -207,3 +207,40 @@ pub fn build(path: &Path, mode: Mode, out: &Path, quiet: bool) -> anyhow::Result
     }
     Ok(())
 }
+
+/// `check LEVEL.bsp --method portals|portals-fast [--reference vis] [--cells K]`: the
+/// level's PVS against its own reference (`vis`) and against the ray oracle from `k`
+/// source leaves (16 segments per pair we call hidden, 256 for pairs the reference has).
+pub fn check(path: &Path, mode: Mode, k: usize, json: bool, quiet: bool) -> anyhow::Result<()> {
+    let level = level(path)?;
+    let portals = prepare(&level)?;
+    let spinner = crate::common::progress(1, quiet, "solving every leaf, then the oracle");
+    let r = sightline_portals::reference::compare_with_reference(&portals, mode, k, 16);
+    spinner.finish_and_clear();
+    if json {
+        return print_json(&r);
+    }
+    println!(
+        "{}: {} leaves, {} portals; Σ|PVS| {} leaves = {:.3} × vis ({}), {} faces = {:.3} × the faces of vis's visible leaves ({})",
+        r.mode,
+        r.visleafs,
+        r.portals,
+        r.leaves_ours,
+        r.leaves_ratio(),
+        r.leaves_reference,
+        r.faces_ours,
+        r.faces_ratio(),
+        r.faces_reference,
+    );
+    println!(
+        "oracle from {} source leaves: missed {} leaf pairs; pairs vis has and we lack: {} ({} with a clear segment); {:.1} s",
+        r.sources, r.missed_pairs, r.reference_only_pairs, r.reference_only_clear, r.seconds
+    );
+    anyhow::ensure!(
+        r.missed_pairs == 0,
+        "{} missed {} visible leaf pairs: a conservativeness bug",
+        r.mode,
+        r.missed_pairs
+    );
+    Ok(())
+}

@@ -44,11 +44,29 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         sweep,
         planes,
         set,
+        reference,
         json,
     } = cmd
     else {
         bail!("internal: `check` called with another command");
     };
+    if let Some(mode) = method
+        .as_deref()
+        .map(|m| crate::commands::bsp::portal_mode(&scene.scene, m))
+        .transpose()?
+        .flatten()
+    {
+        let k: usize = match cells.as_deref() {
+            None => 20,
+            Some(c) => c.parse().ok().filter(|&k| k > 0).with_context(|| {
+                format!("on a .bsp level, --cells is a number of source leaves, got '{c}'")
+            })?,
+        };
+        return crate::commands::bsp::check(&scene.scene, mode, k, json, quiet);
+    }
+    if reference.is_some() {
+        bail!("--reference vis compares a .bsp level's portal PVS with its own vis: it needs a .bsp and --method portals or portals-fast");
+    }
     let sc = Arc::new(load_scene(&scene)?);
     let (m, cells): (Box<dyn VisibilityMethod>, Vec<ViewCell>) = if let Some(file) = pvs {
         if sweep || planes.is_some() {
