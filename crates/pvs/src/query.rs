@@ -77,7 +77,8 @@ pub struct PvsFile {
     cells: Vec<ViewCell>,
     table: CellTable,
     grid: Grid,
-    shapes: Option<ShapeTable>,
+    /// The cells with their shapes, decoded once at open (`None`: every cell a box).
+    shapes: Option<Vec<Cell>>,
     data: Section,
     source: Source,
     cache: Mutex<Vec<(u32, Arc<Vec<u8>>)>>,
@@ -153,6 +154,11 @@ impl PvsFile {
             s.validate()?;
         }
         let cells = table.cells()?;
+        let shapes = shapes.map(|t| {
+            (0..cells.len())
+                .map(|i| t.cell(i, cells[i]))
+                .collect::<Vec<Cell>>()
+        });
         Ok(PvsFile {
             header,
             cells,
@@ -177,11 +183,10 @@ impl PvsFile {
 
     /// Cell `i` with its shape (a box, a convex polyhedron, voxel boxes).
     pub fn cell(&self, i: usize) -> Option<Cell> {
-        let bounds = *self.cells.get(i)?;
-        Some(match &self.shapes {
-            Some(t) => t.cell(i, bounds),
-            None => Cell::Box(bounds),
-        })
+        match &self.shapes {
+            Some(s) => s.get(i).cloned(),
+            None => self.cells.get(i).map(|b| Cell::Box(*b)),
+        }
     }
 
     /// Every cell with its shape.
@@ -221,9 +226,9 @@ impl PvsFile {
     pub fn locate(&self, p: DVec3) -> Option<usize> {
         match &self.shapes {
             None => self.grid.locate(&self.cells, p),
-            Some(_) => self.grid.locate_where(&self.cells, p, |i| {
-                self.cell(i).is_some_and(|c| c.contains(p))
-            }),
+            Some(shapes) => self
+                .grid
+                .locate_where(&self.cells, p, |i| shapes[i].contains(p)),
         }
     }
 
