@@ -164,13 +164,7 @@ fn main() {
                 full_tris += tris;
                 let pyr = fb.pyramid();
                 for (lo, hi) in &cs.boxes {
-                    if let BoxInView::Rect {
-                        i0,
-                        j0,
-                        i1,
-                        j1,
-                        z_near,
-                    } = box_in_view(f.view(), *lo, *hi)
+                    if let Some(([i0, j0, i1, j1], z_near)) = box_in_view(f.view(), *lo, *hi).rect()
                     {
                         if pyr.rect_occluded(i0, j0, i1, j1, z_near) {
                             full_occl += 1;

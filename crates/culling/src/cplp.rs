@@ -148,14 +148,7 @@ impl Culler for Cplp {
         let mut scratch = Vec::with_capacity(16);
         for &(_, k, b) in &order {
             let cell = &self.cells[k as usize];
-            if let BoxInView::Rect {
-                i0,
-                j0,
-                i1,
-                j1,
-                z_near,
-            } = b
-            {
+            if let Some(([i0, j0, i1, j1], z_near)) = b.rect() {
                 if buf.rect_occluded(i0, j0, i1, j1, z_near) {
                     frame.occlusion_culled +=
                         cell.occludees.iter().filter(|&&i| is_candidate(i)).count();
@@ -169,16 +162,12 @@ impl Culler for Cplp {
                         continue;
                     }
                     // Outside, or already hidden: it hides nothing more.
-                    match box_in_view(view, o.lo, o.hi) {
-                        BoxInView::Outside => continue,
-                        BoxInView::Rect {
-                            i0,
-                            j0,
-                            i1,
-                            j1,
-                            z_near,
-                        } if buf.rect_occluded(i0, j0, i1, j1, z_near) => continue,
-                        _ => {}
+                    let b = box_in_view(view, o.lo, o.hi);
+                    let hidden = b
+                        .rect()
+                        .is_some_and(|([i0, j0, i1, j1], z)| buf.rect_occluded(i0, j0, i1, j1, z));
+                    if b == BoxInView::Outside || hidden {
+                        continue;
                     }
                     for f in o.front_faces(eye) {
                         frame.occluder_tris += f.tris as u64;

@@ -121,6 +121,23 @@ pub enum BoxInView {
     },
 }
 
+impl BoxInView {
+    /// The outer screen rectangle `[i0, j0, i1, j1]` and depth lower bound of a box on
+    /// screen; `None` when it is outside or crosses the near plane.
+    pub fn rect(self) -> Option<([u32; 4], f32)> {
+        match self {
+            BoxInView::Rect {
+                i0,
+                j0,
+                i1,
+                j1,
+                z_near,
+            } => Some(([i0, j0, i1, j1], z_near)),
+            _ => None,
+        }
+    }
+}
+
 /// Classify the box `[lo, hi]` in `view`: the side planes pass through the eye, so a
 /// box is outside when all eight corners are on the outer side of one of them.
 pub fn box_in_view(view: &View, lo: DVec3, hi: DVec3) -> BoxInView {

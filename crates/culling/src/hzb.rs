@@ -59,14 +59,7 @@ pub fn draw_occluders(
     for &(_, k, b) in &order {
         // An occluder already hidden hides nothing that is not hidden already: drawn
         // nearest first, most of a street's far prisms are skipped here.
-        if let BoxInView::Rect {
-            i0,
-            j0,
-            i1,
-            j1,
-            z_near,
-        } = b
-        {
+        if let Some(([i0, j0, i1, j1], z_near)) = b.rect() {
             if skip_hidden && buf.rect_occluded(i0, j0, i1, j1, z_near) {
                 continue;
             }

@@ -104,22 +104,11 @@ impl Frame {
         (lo, hi): (glam::DVec3, glam::DVec3),
         hidden: impl FnOnce([u32; 4], f32) -> bool,
     ) {
-        match frustum::box_in_view(view, lo, hi) {
-            frustum::BoxInView::Outside => self.frustum_culled += 1,
-            frustum::BoxInView::CrossesNear => self.visible.push(id),
-            frustum::BoxInView::Rect {
-                i0,
-                j0,
-                i1,
-                j1,
-                z_near,
-            } => {
-                if hidden([i0, j0, i1, j1], z_near) {
-                    self.occlusion_culled += 1;
-                } else {
-                    self.visible.push(id);
-                }
-            }
+        let b = frustum::box_in_view(view, lo, hi);
+        match b.rect() {
+            _ if b == frustum::BoxInView::Outside => self.frustum_culled += 1,
+            Some((rect, z_near)) if hidden(rect, z_near) => self.occlusion_culled += 1,
+            _ => self.visible.push(id),
         }
     }
 
