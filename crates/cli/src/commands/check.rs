@@ -34,6 +34,18 @@ fn read_cells(arg: &str, scene: &sightline_scene::Scene) -> anyhow::Result<Vec<V
     Ok(cells)
 }
 
+/// `--cells K` as a positive count (20 when not given); `what` names it in the error.
+fn count_arg(cells: Option<&str>, what: &str) -> anyhow::Result<usize> {
+    match cells {
+        None => Ok(20),
+        Some(c) => c
+            .parse()
+            .ok()
+            .filter(|&k| k > 0)
+            .with_context(|| format!("{what}, got '{c}'")),
+    }
+}
+
 pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
     let Command::Check {
         scene,
@@ -56,12 +68,10 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         .transpose()?
         .flatten()
     {
-        let k: usize = match cells.as_deref() {
-            None => 20,
-            Some(c) => c.parse().ok().filter(|&k| k > 0).with_context(|| {
-                format!("on a .bsp level, --cells is a number of source leaves, got '{c}'")
-            })?,
-        };
+        let k = count_arg(
+            cells.as_deref(),
+            "on a .bsp level, --cells is a number of source leaves",
+        )?;
         return crate::commands::bsp::check(&scene.scene, mode, k, json, quiet);
     }
     if reference.is_some() {
@@ -84,12 +94,10 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
                 scene.scene.display()
             )
         })?;
-        let k: usize = match cells.as_deref() {
-            None => 20,
-            Some(c) => c.parse().ok().filter(|&k| k > 0).with_context(|| {
-                format!("with a .pvs file, --cells is a number of cells to sample, got '{c}'")
-            })?,
-        };
+        let k = count_arg(
+            cells.as_deref(),
+            "with a .pvs file, --cells is a number of cells to sample",
+        )?;
         let stored = StoredPvs(f);
         let picked = stored.sample_cells(k);
         (Box::new(stored), picked)
