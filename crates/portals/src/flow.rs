@@ -26,6 +26,7 @@
 
 use crate::bits::Bits;
 use crate::winding::{Plane, Winding, ON_EPSILON};
+use rayon::prelude::*;
 
 /// Tolerance of the cheap front/back tests of the base flood: a portal counts as in
 /// front if some point is more than this in front (a hair, not vis's 0.1).
@@ -45,6 +46,75 @@ pub struct DirPortal {
 pub struct Graph {
     pub portals: Vec<DirPortal>,
     pub leaf_portals: Vec<Vec<u32>>,
+}
+
+/// The portal graph of any cell complex: build one from cells (numbered `0..cells`) and
+/// two-sided portals with [`Graph::from_portals`], then [`might_see_all`] and
+/// [`flow_all`] give what each directed portal can see.
+impl Graph {
+    /// Each portal `(winding, plane, [a, b])` (normal pointing from `a` into `b`) is
+    /// used in both directions: directed portal `2 i` leads from `a` into `b`, `2 i + 1`
+    /// back.
+    pub fn from_portals<'a>(
+        cells: usize,
+        portals: impl IntoIterator<Item = (&'a Winding, Plane, [u32; 2])>,
+    ) -> Graph {
+        let mut dir = Vec::new();
+        let mut leaf_portals = vec![Vec::new(); cells];
+        for (w, plane, [a, b]) in portals {
+            leaf_portals[a as usize].push(dir.len() as u32);
+            dir.push(DirPortal {
+                winding: w.clone(),
+                plane,
+                from: a,
+                to: b,
+            });
+            leaf_portals[b as usize].push(dir.len() as u32);
+            let mut rev = w.points.clone();
+            rev.reverse();
+            dir.push(DirPortal {
+                winding: Winding::new(rev),
+                plane: plane.flipped(),
+                from: b,
+                to: a,
+            });
+        }
+        Graph {
+            portals: dir,
+            leaf_portals,
+        }
+    }
+}
+
+/// The base flood of every directed portal, in parallel (`Mode::Fast`'s sets).
+pub fn might_see_all(g: &Graph) -> Vec<Bits> {
+    (0..g.portals.len())
+        .into_par_iter()
+        .map(|p| might_see(g, p))
+        .collect()
+}
+
+/// The flow of every directed portal (`Mode::Full`'s sets), portals with the smallest
+/// floods first, in waves: a finished portal's flow bounds what later flows can see
+/// behind it (vis's `stat_done`).
+pub fn flow_all(g: &Graph, mightsee: &[Bits]) -> Vec<Bits> {
+    let n = g.portals.len();
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by_key(|&p| (mightsee[p].count(), p));
+    let mut done: Vec<Option<Bits>> = vec![None; n];
+    let wave = 64.max(n / 256);
+    for chunk in order.chunks(wave) {
+        let results: Vec<Bits> = chunk
+            .par_iter()
+            .map(|&p| flow(g, p, mightsee, &done))
+            .collect();
+        for (&p, r) in chunk.iter().zip(results) {
+            done[p] = Some(r);
+        }
+    }
+    done.into_iter()
+        .map(|d| d.unwrap_or_else(|| Bits::new(n)))
+        .collect()
 }
 
 /// Base flood of every directed portal: the portals a line through it might reach.

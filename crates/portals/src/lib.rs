@@ -90,35 +90,11 @@ impl Portals {
             return Err(PortalError::Empty);
         }
         let portals = portalize::portalize(level);
-        let mut dir = Vec::with_capacity(2 * portals.len());
-        let mut leaf_portals = vec![Vec::new(); level.leaves.len()];
-        for p in &portals {
-            let [a, b] = p.leaves;
-            leaf_portals[a as usize].push(dir.len() as u32);
-            dir.push(DirPortal {
-                winding: p.winding.clone(),
-                plane: p.plane,
-                from: a,
-                to: b,
-            });
-            leaf_portals[b as usize].push(dir.len() as u32);
-            let mut rev = p.winding.points.clone();
-            rev.reverse();
-            dir.push(DirPortal {
-                winding: Winding::new(rev),
-                plane: p.plane.flipped(),
-                from: b,
-                to: a,
-            });
-        }
-        let graph = Graph {
-            portals: dir,
-            leaf_portals,
-        };
-        let mightsee = (0..graph.portals.len())
-            .into_par_iter()
-            .map(|p| flow::might_see(&graph, p))
-            .collect();
+        let graph = Graph::from_portals(
+            level.leaves.len(),
+            portals.iter().map(|p| (&p.winding, p.plane, p.leaves)),
+        );
+        let mightsee = flow::might_see_all(&graph);
         let faces = level
             .faces
             .iter()
@@ -194,30 +170,10 @@ impl Portals {
     pub fn portal_sets(&self, mode: Mode) -> &[Bits] {
         match mode {
             Mode::Fast => &self.mightsee,
-            Mode::Full => self.flows.get_or_init(|| self.flow_all()),
+            Mode::Full => self
+                .flows
+                .get_or_init(|| flow::flow_all(&self.graph, &self.mightsee)),
         }
-    }
-
-    fn flow_all(&self) -> Vec<Bits> {
-        let n = self.graph.portals.len();
-        // Portals with the smallest floods first, in waves: a finished portal's flow
-        // bounds what later flows can see behind it (vis's `stat_done`).
-        let mut order: Vec<usize> = (0..n).collect();
-        order.sort_by_key(|&p| (self.mightsee[p].count(), p));
-        let mut done: Vec<Option<Bits>> = vec![None; n];
-        let wave = 64.max(n / 256);
-        for chunk in order.chunks(wave) {
-            let results: Vec<Bits> = chunk
-                .par_iter()
-                .map(|&p| flow::flow(&self.graph, p, &self.mightsee, &done))
-                .collect();
-            for (&p, r) in chunk.iter().zip(results) {
-                done[p] = Some(r);
-            }
-        }
-        done.into_iter()
-            .map(|d| d.unwrap_or_else(|| Bits::new(n)))
-            .collect()
     }
 
     fn leaf_pvs(&self, leaf: u32, vis: &[Bits], mode: Mode) -> LeafPvs {
