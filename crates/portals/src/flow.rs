@@ -8,19 +8,23 @@
 //!    graph through the portals that lie (partly) in front of it and that it lies
 //!    (partly) behind. Any sight line through a sequence of portals crosses each one
 //!    forwards, so every portal of the sequence passes these two tests against the
-//!    source: the flood holds every portal any line through the source can reach.
+//!    source: the flood holds every leaf any line through the source can reach.
 //! 2. **Flow** (`Mode::Full`): depth-first over portal sequences from the source
-//!    portal, restricted to the flood. The source winding is clipped behind each
+//!    portal, restricted to the flood, never entering a leaf twice, and skipping a
+//!    portal when every leaf that might lie behind it (its own flow when known, else
+//!    its flood) is already seen — vis's pruning, which makes the flow tractable.
+//!    The source winding is clipped behind each
 //!    portal passed, the next portal in front of the source and the previous one, and
 //!    by the *separating planes* of the source and the last portal passed (planes
 //!    through an edge of one and a vertex of the other with the two on opposite
 //!    sides): a line through both crosses such a plane once, between them, so beyond
-//!    the pass it stays on the pass's side. A sequence is pruned only when a winding
-//!    becomes empty, and clipping keeps points within `ON_EPSILON` of each plane:
-//!    ties count as visible.
+//!    the pass it stays on the pass's side; the same planes built from the new pass
+//!    and the previous one clip the source. A sequence is pruned only when a winding
+//!    has nothing left clearly in front of a plane (grazing lines see nothing), and
+//!    clipping keeps points within `ON_EPSILON` behind each plane.
 //!
-//! Faces: a face of a leaf reached through portal `q` from source portal `p` is kept
-//! when a line through `p` then `q` can reach its front: it has a point in front of
+//! Faces: a face of a leaf seen through source portal `p` and entered by portal `q` is
+//! kept when a line through `p` then `q` can reach its front: it has a point in front of
 //! both portals, both portals have a point in front of it (or it is a two-sided
 //! liquid surface), and the separating planes of `p` and `q` leave some of it.
 
@@ -54,7 +58,7 @@ pub struct Graph {
 impl Graph {
     /// Each portal `(winding, plane, [a, b])` (normal pointing from `a` into `b`) is
     /// used in both directions: directed portal `2 i` leads from `a` into `b`, `2 i + 1`
-    /// back.
+    /// back (so `q ^ 1` is always `q` reversed).
     pub fn from_portals<'a>(
         cells: usize,
         portals: impl IntoIterator<Item = (&'a Winding, Plane, [u32; 2])>,
@@ -86,7 +90,7 @@ impl Graph {
     }
 }
 
-/// The base flood of every directed portal, in parallel (`Mode::Fast`'s sets).
+/// The base flood of every directed portal, in parallel (`Mode::Fast`'s cell sets).
 pub fn might_see_all(g: &Graph) -> Vec<Bits> {
     (0..g.portals.len())
         .into_par_iter()
@@ -94,7 +98,7 @@ pub fn might_see_all(g: &Graph) -> Vec<Bits> {
         .collect()
 }
 
-/// The flow of every directed portal (`Mode::Full`'s sets), portals with the smallest
+/// The flow of every directed portal (`Mode::Full`'s cell sets), portals with the smallest
 /// floods first, in waves: a finished portal's flow bounds what later flows can see
 /// behind it (vis's `stat_done`).
 pub fn flow_all(g: &Graph, mightsee: &[Bits]) -> Vec<Bits> {
@@ -117,7 +121,8 @@ pub fn flow_all(g: &Graph, mightsee: &[Bits]) -> Vec<Bits> {
         .collect()
 }
 
-/// Base flood of every directed portal: the portals a line through it might reach.
+/// Base flood of directed portal `p`: the cells a line through it might reach (its
+/// `to` cell included).
 pub fn might_see(g: &Graph, p: usize) -> Bits {
     let n = g.portals.len();
     let base = &g.portals[p];
@@ -134,24 +139,23 @@ pub fn might_see(g: &Graph, p: usize) -> Bits {
         }
         front.set(q);
     }
-    let mut flood = Bits::new(n);
+    let mut flood = Bits::new(g.leaf_portals.len());
     let mut stack = vec![base.to];
-    let mut seen_leaf = std::collections::HashSet::new();
-    seen_leaf.insert(base.to);
+    flood.set(base.to as usize);
     while let Some(leaf) = stack.pop() {
         for &q in &g.leaf_portals[leaf as usize] {
-            let q = q as usize;
-            if front.get(q) && !flood.get(q) {
-                flood.set(q);
-                if seen_leaf.insert(g.portals[q].to) {
-                    stack.push(g.portals[q].to);
-                }
+            let to = g.portals[q as usize].to as usize;
+            if front.get(q as usize) && !flood.get(to) {
+                flood.set(to);
+                stack.push(to as u32);
             }
         }
     }
     flood
 }
 
+/// One step of a portal sequence: the source portal as clipped so far, the last
+/// portal passed (clipped), its plane, and the cells still reachable.
 struct Frame<'a> {
     source: Winding,
     pass: Option<Winding>,
@@ -159,120 +163,122 @@ struct Frame<'a> {
     might: std::borrow::Cow<'a, Bits>,
 }
 
-/// The portals visible through directed portal `p` by flow (a subset of `mightsee[p]`);
-/// `done[q]`, when known, is portal `q`'s own flow result, a tighter bound than its
-/// flood for what lies behind it.
+/// The cells visible through directed portal `p` by flow (a subset of `mightsee[p]`,
+/// its `to` cell included); `done[q]`, when known, is portal `q`'s own flow result, a
+/// tighter bound than its flood for what lies behind it.
 pub fn flow(g: &Graph, p: usize, mightsee: &[Bits], done: &[Option<Bits>]) -> Bits {
     let base = &g.portals[p];
-    let mut vis = Bits::new(g.portals.len());
-    let mut leaves = Bits::new(g.leaf_portals.len());
-    leaves.set(base.to as usize);
+    let cells = g.leaf_portals.len();
+    let mut st = State {
+        g,
+        base,
+        mightsee,
+        done,
+        vis: Bits::new(cells),
+        on_stack: Bits::new(cells),
+    };
     let head = Frame {
         source: base.winding.clone(),
         pass: None,
         plane: base.plane,
         might: std::borrow::Cow::Borrowed(&mightsee[p]),
     };
-    recurse(
-        g,
-        base,
-        base.to,
-        &head,
-        mightsee,
-        done,
-        &mut vis,
-        &mut leaves,
-    );
-    vis
+    st.recurse(base.to, &head);
+    st.vis
 }
 
-#[allow(clippy::too_many_arguments)]
-fn recurse(
-    g: &Graph,
-    base: &DirPortal,
-    leaf: u32,
-    prev: &Frame,
-    mightsee: &[Bits],
-    done: &[Option<Bits>],
-    vis: &mut Bits,
-    leaves: &mut Bits,
-) {
-    // The separating planes of this frame's source and pass, built once for all the
-    // leaf's portals (vis caches them the same way). They come from the source before
-    // it is clipped behind the next portal: a larger source, so planes that separate
-    // it from the pass separate every part of it too.
-    let mut seps: Option<Vec<Plane>> = None;
-    for &q in &g.leaf_portals[leaf as usize] {
-        let q = q as usize;
-        if !prev.might.get(q) {
-            continue;
-        }
-        let test = done[q].as_ref().unwrap_or(&mightsee[q]);
-        let more = prev
-            .might
-            .0
-            .iter()
-            .zip(&test.0)
-            .zip(&vis.0)
-            .any(|((a, b), v)| a & b & !v != 0);
-        let tp = &g.portals[q];
-        if !more && leaves.get(tp.to as usize) {
-            // Nothing new behind it, and its leaf is already seen: marked without the
-            // clipping (a superset, so the face pass still tests this pair).
-            vis.set(q);
-            continue;
-        }
-        // The next portal in front of the source portal.
-        let Some(mut pass) = tp.winding.clip(&base.plane, ON_EPSILON) else {
-            continue;
-        };
-        // The source behind the next portal.
-        let Some(mut source) = prev.source.clip(&tp.plane.flipped(), ON_EPSILON) else {
-            continue;
-        };
-        if let Some(prev_pass) = &prev.pass {
-            let Some(w) = pass.clip(&prev.plane, ON_EPSILON) else {
+struct State<'a> {
+    g: &'a Graph,
+    base: &'a DirPortal,
+    mightsee: &'a [Bits],
+    done: &'a [Option<Bits>],
+    vis: Bits,
+    /// The cells of the current sequence: a line never enters a cell twice.
+    on_stack: Bits,
+}
+
+impl State<'_> {
+    fn recurse(&mut self, leaf: u32, prev: &Frame) {
+        self.vis.set(leaf as usize);
+        self.on_stack.set(leaf as usize);
+        // The separating planes of this frame's source and pass, built once for all
+        // the cell's portals (vis caches them the same way). They come from the source
+        // before it is clipped behind the next portal: a larger source, so planes that
+        // separate it from the pass separate every part of it too.
+        let mut seps: Option<Vec<Plane>> = None;
+        let g = self.g;
+        for &q in &g.leaf_portals[leaf as usize] {
+            let q = q as usize;
+            let tp = &g.portals[q];
+            let to = tp.to as usize;
+            if !prev.might.get(to) || self.on_stack.get(to) {
                 continue;
-            };
-            let seps = seps.get_or_insert_with(|| {
-                let mut v = separators(&prev.source, prev_pass, false);
-                v.extend(separators(prev_pass, &prev.source, true));
-                v
-            });
-            let mut w = Some(w);
-            for plane in seps.iter() {
-                w = w.and_then(|w| w.clip(plane, ON_EPSILON));
             }
-            let Some(w) = w else {
-                continue;
-            };
-            pass = w;
-            // The same backwards: lines from the new pass through the previous one
-            // reach only part of the source (vis's tests 2 and 3).
-            let Some(src) = clip_to_separators(&pass, prev_pass, source, false)
-                .and_then(|s| clip_to_separators(prev_pass, &pass, s, true))
-            else {
-                continue;
-            };
-            source = src;
-        }
-        vis.set(q);
-        leaves.set(tp.to as usize);
-        let might = Bits(
-            prev.might
+            let test = self.done[q].as_ref().unwrap_or(&self.mightsee[q]);
+            // Nothing behind this portal that is not seen already: skip it (vis).
+            let more = prev
+                .might
                 .0
                 .iter()
                 .zip(&test.0)
-                .map(|(a, b)| a & b)
-                .collect(),
-        );
-        let frame = Frame {
-            source,
-            pass: Some(pass),
-            plane: tp.plane,
-            might: std::borrow::Cow::Owned(might),
-        };
-        recurse(g, base, tp.to, &frame, mightsee, done, vis, leaves);
+                .zip(&self.vis.0)
+                .any(|((a, b), v)| a & b & !v != 0);
+            if !more {
+                continue;
+            }
+            // The next portal in front of the source portal.
+            let Some(mut pass) = tp.winding.clip(&self.base.plane, ON_EPSILON) else {
+                continue;
+            };
+            let mut source = prev.source.clone();
+            if let Some(prev_pass) = &prev.pass {
+                // In front of the previous portal.
+                let Some(w) = pass.clip(&prev.plane, ON_EPSILON) else {
+                    continue;
+                };
+                // The source behind the next portal.
+                let Some(src) = source.clip(&tp.plane.flipped(), ON_EPSILON) else {
+                    continue;
+                };
+                let seps = seps.get_or_insert_with(|| {
+                    let mut v = separators(&prev.source, prev_pass, false);
+                    v.extend(separators(prev_pass, &prev.source, true));
+                    v
+                });
+                let mut w = Some(w);
+                for plane in seps.iter() {
+                    w = w.and_then(|w| w.clip(plane, ON_EPSILON));
+                }
+                let Some(w) = w else {
+                    continue;
+                };
+                pass = w;
+                // The same backwards: lines from the new pass through the previous one
+                // reach only part of the source (vis's tests 2 and 3).
+                let Some(src) = clip_to_separators(&pass, prev_pass, src, false)
+                    .and_then(|s| clip_to_separators(prev_pass, &pass, s, true))
+                else {
+                    continue;
+                };
+                source = src;
+            }
+            let might = Bits(
+                prev.might
+                    .0
+                    .iter()
+                    .zip(&test.0)
+                    .map(|(a, b)| a & b)
+                    .collect(),
+            );
+            let frame = Frame {
+                source,
+                pass: Some(pass),
+                plane: tp.plane,
+                might: std::borrow::Cow::Owned(might),
+            };
+            self.recurse(tp.to, &frame);
+        }
+        self.on_stack.0[leaf as usize >> 6] &= !(1u64 << (leaf & 63));
     }
 }
 
@@ -283,6 +289,23 @@ fn recurse(
 /// front part.
 pub fn separators(source: &Winding, pass: &Winding, flip: bool) -> Vec<Plane> {
     let mut out = Vec::new();
+    for_each_separator(source, pass, flip, |p| {
+        out.push(p);
+        true
+    });
+    out
+}
+
+/// Calls `f` with each separating plane of `source` and `pass` (see [`separators`])
+/// until it returns `false`; returns whether every call returned `true`. A plane
+/// through an edge of `source` has all of `pass` in front only through the vertex
+/// of `pass` furthest from it, so each edge gives at most one plane (as in vis).
+fn for_each_separator(
+    source: &Winding,
+    pass: &Winding,
+    flip: bool,
+    mut f: impl FnMut(Plane) -> bool,
+) -> bool {
     let (ns, np) = (source.points.len(), pass.points.len());
     for i in 0..ns {
         let l = (i + 1) % ns;
@@ -333,10 +356,13 @@ pub fn separators(source: &Winding, pass: &Winding, flip: bool) -> Vec<Plane> {
             if !separates || !clear {
                 continue;
             }
-            out.push(if flip { plane.flipped() } else { plane });
+            if !f(if flip { plane.flipped() } else { plane }) {
+                return false;
+            }
+            break;
         }
     }
-    out
+    true
 }
 
 /// `target` clipped by the separating planes of `source` and `pass` (see
@@ -347,9 +373,10 @@ pub fn clip_to_separators(
     target: Winding,
     flip: bool,
 ) -> Option<Winding> {
-    let mut t = target;
-    for plane in separators(source, pass, flip) {
-        t = t.clip(&plane, ON_EPSILON)?;
-    }
-    Some(t)
+    let mut t = Some(target);
+    for_each_separator(source, pass, flip, |plane| {
+        t = t.as_ref().and_then(|w| w.clip(&plane, ON_EPSILON));
+        t.is_some()
+    });
+    t
 }

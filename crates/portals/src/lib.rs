@@ -186,45 +186,59 @@ impl Portals {
         self.assemble(leaf, &v, mode)
     }
 
-    /// Leaves and faces of `leaf` from the portal sets of its outgoing portals.
+    /// Leaves and faces of `leaf` from the cell sets of its outgoing portals. A face of
+    /// a leaf `l` seen through portal `p` (beyond `p`'s own leaf) is kept when a line
+    /// through `p` and then some portal `q` into `l` can reach it; every line into `l`
+    /// enters by such a `q`, from a leaf that `p` sees and through a portal that `p`'s
+    /// flood tests pass, so only those are tried.
     fn assemble(&self, leaf: u32, vis: &[(u32, &Bits)], mode: Mode) -> LeafPvs {
         let level = &self.level;
+        let g = &self.graph;
         let mut leaves = Bits::new(level.leaves.len());
         let mut faces = Bits::new(level.faces.len());
-        let mark_all = |faces: &mut Bits, l: u32| {
-            for &f in &level.leaves[l as usize].faces {
+        let mark_all = |faces: &mut Bits, l: usize| {
+            for &f in &level.leaves[l].faces {
                 faces.set(f as usize);
             }
         };
         leaves.set(leaf as usize);
-        mark_all(&mut faces, leaf);
+        mark_all(&mut faces, leaf as usize);
         for (p, v) in vis {
-            let pp = &self.graph.portals[*p as usize];
-            leaves.set(pp.to as usize);
-            mark_all(&mut faces, pp.to);
-            for q in v.ones() {
-                let qp = &self.graph.portals[q];
-                leaves.set(qp.to as usize);
-                let lf = &level.leaves[qp.to as usize].faces;
-                if lf.iter().all(|&f| faces.get(f as usize)) {
+            let pp = &g.portals[*p as usize];
+            leaves.or(v);
+            mark_all(&mut faces, pp.to as usize);
+            for l in v.ones() {
+                let lf = &level.leaves[l].faces;
+                if l == pp.to as usize || lf.iter().all(|&f| faces.get(f as usize)) {
                     continue;
                 }
                 if mode == Mode::Fast {
-                    mark_all(&mut faces, qp.to);
+                    mark_all(&mut faces, l);
                     continue;
                 }
-                // Lines through p then q: p's part behind q, separating planes of both.
-                let Some(source) = pp.winding.clip(&qp.plane.flipped(), ON_EPSILON) else {
-                    continue;
-                };
-                let mut seps = flow::separators(&source, &qp.winding, false);
-                seps.extend(flow::separators(&qp.winding, &source, true));
-                for &f in lf {
-                    if faces.get(f as usize) {
+                for &out in &g.leaf_portals[l] {
+                    // The reverse of an outgoing portal of `l` leads into `l`.
+                    let q = (out ^ 1) as usize;
+                    let qp = &g.portals[q];
+                    if !v.get(qp.from as usize)
+                        || !qp.winding.any_front(&pp.plane, flow::FLOOD_EPSILON)
+                        || !pp.winding.any_back(&qp.plane, flow::FLOOD_EPSILON)
+                    {
                         continue;
                     }
-                    if self.face_reachable(&source, pp, qp, &seps, f as usize) {
-                        faces.set(f as usize);
+                    // Lines through p then q: p's part behind q, separating planes of both.
+                    let Some(source) = pp.winding.clip(&qp.plane.flipped(), ON_EPSILON) else {
+                        continue;
+                    };
+                    let mut seps = flow::separators(&source, &qp.winding, false);
+                    seps.extend(flow::separators(&qp.winding, &source, true));
+                    for &f in lf {
+                        if faces.get(f as usize) {
+                            continue;
+                        }
+                        if self.face_reachable(&source, pp, qp, &seps, f as usize) {
+                            faces.set(f as usize);
+                        }
                     }
                 }
             }

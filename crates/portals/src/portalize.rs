@@ -3,12 +3,14 @@
 //! ancestors, is split down both of the node's subtrees; a piece that ends in an open
 //! leaf on each side is a portal between the two leaves.
 //!
-//! Splitting keeps points within [`ON_EPSILON`] on both sides, so pieces overlap by a
-//! hair instead of losing one: no opening between two open leaves is ever left without
-//! a portal, however thin (a missing portal would be a missed view). Solid and sky
-//! leaves block sight; empty space and the liquids (water, slime, lava) pass it.
+//! Clipping and splitting keep points within [`TOUCH_EPSILON`] on both sides, so pieces
+//! overlap by the float noise of the level's coordinates and no more: no opening between
+//! two open leaves is ever left without a portal, however thin (a missing portal would
+//! be a missed view), and no sliver of the clipping margin becomes a portal between
+//! leaves that only meet at an edge. Solid and sky leaves block sight; empty space and
+//! the liquids (water, slime, lava) pass it.
 
-use crate::winding::{Plane, Winding, ON_EPSILON};
+use crate::winding::{Plane, Winding, TOUCH_EPSILON};
 use sightline_geom::DVec3;
 use sightline_scene::import::bsp::{BspLevel, Child};
 
@@ -58,7 +60,7 @@ fn walk(level: &BspLevel, c: Child, ancestors: &mut Vec<Plane>, size: f64, out: 
     let plane = Plane::new(DVec3::from(p.normal), p.dist);
     let mut w = Some(Winding::base_for_plane(&plane, size));
     for a in ancestors.iter() {
-        w = w.and_then(|w| w.clip(a, ON_EPSILON));
+        w = w.and_then(|w| w.clip(a, TOUCH_EPSILON));
     }
     if let Some(w) = w {
         let mut fronts = Vec::new();
@@ -100,7 +102,7 @@ fn push_down(level: &BspLevel, c: Child, w: Winding, out: &mut Vec<(u32, Winding
             let node = &level.nodes[n as usize];
             let p = level.planes[node.plane as usize];
             let plane = Plane::new(DVec3::from(p.normal), p.dist);
-            let (f, b) = w.split(&plane, ON_EPSILON);
+            let (f, b) = w.split(&plane, TOUCH_EPSILON);
             if let Some(f) = f {
                 push_down(level, node.children[0], f, out);
             }
