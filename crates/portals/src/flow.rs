@@ -4,24 +4,29 @@
 //! Every portal is used in both directions; a directed portal leads from leaf `from`
 //! into leaf `to` and its plane's normal points into `to`.
 //!
-//! 1. **Base flood** ([`might_see`], `Mode::Fast`): from a source portal, flood the leaf
+//! What a directed portal sees is a [`Seen`]: the cells behind it and the portals lines
+//! through it may cross (a superset of the portals some line does cross).
+//!
+//! 1. **Base flood** ([`might_see`], `Mode::Fast`): from a source portal, flood the cell
 //!    graph through the portals that lie (partly) in front of it and that it lies
 //!    (partly) behind. Any sight line through a sequence of portals crosses each one
 //!    forwards, so every portal of the sequence passes these two tests against the
-//!    source: the flood holds every leaf any line through the source can reach.
-//! 2. **Flow** (`Mode::Full`): depth-first over portal sequences from the source
-//!    portal, restricted to the flood, never entering a leaf twice, and skipping a
-//!    portal when every leaf that might lie behind it (its own flow when known, else
-//!    its flood) is already seen — vis's pruning, which makes the flow tractable.
-//!    The source winding is clipped behind each
-//!    portal passed, the next portal in front of the source and the previous one, and
-//!    by the *separating planes* of the source and the last portal passed (planes
-//!    through an edge of one and a vertex of the other with the two on opposite
-//!    sides): a line through both crosses such a plane once, between them, so beyond
-//!    the pass it stays on the pass's side; the same planes built from the new pass
-//!    and the previous one clip the source. A sequence is pruned only when a winding
-//!    has nothing left clearly in front of a plane (grazing lines see nothing), and
-//!    clipping keeps points within `ON_EPSILON` behind each plane.
+//!    source: the flood holds every portal and cell any line through the source reaches.
+//! 2. **Flow** (`Mode::Full`): depth first over portal sequences from the source
+//!    portal, restricted to the flood and, behind each portal passed, to what that
+//!    portal sees (its flow when done, else its flood); a sequence never enters a cell
+//!    twice. A portal is skipped when every cell that might lie behind it is seen
+//!    already (vis's pruning, which makes the flow tractable); the portals behind it
+//!    are then counted as crossed, so the portal set stays a superset. The source
+//!    winding is clipped behind each portal passed, the next portal in front of the
+//!    source and the previous one, and by the *separating planes* of the source and
+//!    the last portal passed (planes through an edge of one and a vertex of the other
+//!    with the two on opposite sides): a line through both crosses such a plane once,
+//!    between them, so beyond the pass it stays on the pass's side; the same planes
+//!    built from the new pass and the previous one clip the source. A sequence is
+//!    pruned only when a winding has nothing left clearly in front of a plane (grazing
+//!    lines see nothing, SPEC §3), and clipping keeps points within `ON_EPSILON` behind
+//!    each plane.
 //!
 //! Faces: a face of a leaf seen through source portal `p` and entered by portal `q` is
 //! kept when a line through `p` then `q` can reach its front: it has a point in front of
@@ -90,25 +95,34 @@ impl Graph {
     }
 }
 
-/// The base flood of every directed portal, in parallel (`Mode::Fast`'s cell sets).
-pub fn might_see_all(g: &Graph) -> Vec<Bits> {
+/// What a directed portal sees: the cells, and the portals lines through it may pass.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Seen {
+    /// Cells (its own `to` cell included).
+    pub cells: Bits,
+    /// Directed portals: every portal a line through this one can cross (a superset).
+    pub portals: Bits,
+}
+
+/// The base flood of every directed portal, in parallel (`Mode::Fast`).
+pub fn might_see_all(g: &Graph) -> Vec<Seen> {
     (0..g.portals.len())
         .into_par_iter()
         .map(|p| might_see(g, p))
         .collect()
 }
 
-/// The flow of every directed portal (`Mode::Full`'s cell sets), portals with the smallest
-/// floods first, in waves: a finished portal's flow bounds what later flows can see
-/// behind it (vis's `stat_done`).
-pub fn flow_all(g: &Graph, mightsee: &[Bits]) -> Vec<Bits> {
+/// The flow of every directed portal (`Mode::Full`), portals with the smallest floods
+/// first, in waves: a finished portal's flow bounds what later flows can see behind it
+/// (vis's `stat_done`).
+pub fn flow_all(g: &Graph, mightsee: &[Seen]) -> Vec<Seen> {
     let n = g.portals.len();
     let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by_key(|&p| (mightsee[p].count(), p));
-    let mut done: Vec<Option<Bits>> = vec![None; n];
+    order.sort_by_key(|&p| (mightsee[p].cells.count(), p));
+    let mut done: Vec<Option<Seen>> = vec![None; n];
     let wave = 64.max(n / 256);
     for chunk in order.chunks(wave) {
-        let results: Vec<Bits> = chunk
+        let results: Vec<Seen> = chunk
             .par_iter()
             .map(|&p| flow(g, p, mightsee, &done))
             .collect();
@@ -117,13 +131,25 @@ pub fn flow_all(g: &Graph, mightsee: &[Bits]) -> Vec<Bits> {
         }
     }
     done.into_iter()
-        .map(|d| d.unwrap_or_else(|| Bits::new(n)))
+        .enumerate()
+        .map(|(p, d)| d.unwrap_or_else(|| mightsee[p].clone()))
         .collect()
 }
 
-/// Base flood of directed portal `p`: the cells a line through it might reach (its
-/// `to` cell included).
-pub fn might_see(g: &Graph, p: usize) -> Bits {
+/// The cells of a cell's PVS from what its outgoing portals see: itself and every cell
+/// seen through one of them.
+pub fn cell_pvs(g: &Graph, seen: &[Seen], cell: u32) -> Bits {
+    let mut out = Bits::new(g.leaf_portals.len());
+    out.set(cell as usize);
+    for &p in &g.leaf_portals[cell as usize] {
+        out.or(&seen[p as usize].cells);
+    }
+    out
+}
+
+/// Base flood of directed portal `p`: the portals a line through it might cross and
+/// the cells behind them (its `to` cell included).
+pub fn might_see(g: &Graph, p: usize) -> Seen {
     let n = g.portals.len();
     let base = &g.portals[p];
     let mut front = Bits::new(n);
@@ -139,34 +165,45 @@ pub fn might_see(g: &Graph, p: usize) -> Bits {
         }
         front.set(q);
     }
-    let mut flood = Bits::new(g.leaf_portals.len());
+    let mut cells = Bits::new(g.leaf_portals.len());
+    let mut portals = Bits::new(n);
     let mut stack = vec![base.to];
-    flood.set(base.to as usize);
+    cells.set(base.to as usize);
     while let Some(leaf) = stack.pop() {
         for &q in &g.leaf_portals[leaf as usize] {
-            let to = g.portals[q as usize].to as usize;
-            if front.get(q as usize) && !flood.get(to) {
-                flood.set(to);
+            let q = q as usize;
+            if !front.get(q) || portals.get(q) {
+                continue;
+            }
+            portals.set(q);
+            let to = g.portals[q].to as usize;
+            if !cells.get(to) {
+                cells.set(to);
                 stack.push(to as u32);
             }
         }
     }
-    flood
+    Seen { cells, portals }
 }
 
 /// One step of a portal sequence: the source portal as clipped so far, the last
-/// portal passed (clipped), its plane, and the cells still reachable.
+/// portal passed (clipped), its plane, and the cells and portals still reachable.
 struct Frame<'a> {
     source: Winding,
     pass: Option<Winding>,
     plane: Plane,
-    might: std::borrow::Cow<'a, Bits>,
+    cells: std::borrow::Cow<'a, Bits>,
+    portals: std::borrow::Cow<'a, Bits>,
 }
 
-/// The cells visible through directed portal `p` by flow (a subset of `mightsee[p]`,
-/// its `to` cell included); `done[q]`, when known, is portal `q`'s own flow result, a
-/// tighter bound than its flood for what lies behind it.
-pub fn flow(g: &Graph, p: usize, mightsee: &[Bits], done: &[Option<Bits>]) -> Bits {
+fn and(a: &Bits, b: &Bits) -> Bits {
+    Bits(a.0.iter().zip(&b.0).map(|(x, y)| x & y).collect())
+}
+
+/// What directed portal `p` sees by flow (within `mightsee[p]`); `done[q]`, when
+/// known, is portal `q`'s own flow result, a tighter bound than its flood for what
+/// lies behind it.
+pub fn flow(g: &Graph, p: usize, mightsee: &[Seen], done: &[Option<Seen>]) -> Seen {
     let base = &g.portals[p];
     let cells = g.leaf_portals.len();
     let mut st = State {
@@ -174,14 +211,18 @@ pub fn flow(g: &Graph, p: usize, mightsee: &[Bits], done: &[Option<Bits>]) -> Bi
         base,
         mightsee,
         done,
-        vis: Bits::new(cells),
+        vis: Seen {
+            cells: Bits::new(cells),
+            portals: Bits::new(g.portals.len()),
+        },
         on_stack: Bits::new(cells),
     };
     let head = Frame {
         source: base.winding.clone(),
         pass: None,
         plane: base.plane,
-        might: std::borrow::Cow::Borrowed(&mightsee[p]),
+        cells: std::borrow::Cow::Borrowed(&mightsee[p].cells),
+        portals: std::borrow::Cow::Borrowed(&mightsee[p].portals),
     };
     st.recurse(base.to, &head);
     st.vis
@@ -190,16 +231,16 @@ pub fn flow(g: &Graph, p: usize, mightsee: &[Bits], done: &[Option<Bits>]) -> Bi
 struct State<'a> {
     g: &'a Graph,
     base: &'a DirPortal,
-    mightsee: &'a [Bits],
-    done: &'a [Option<Bits>],
-    vis: Bits,
+    mightsee: &'a [Seen],
+    done: &'a [Option<Seen>],
+    vis: Seen,
     /// The cells of the current sequence: a line never enters a cell twice.
     on_stack: Bits,
 }
 
 impl State<'_> {
     fn recurse(&mut self, leaf: u32, prev: &Frame) {
-        self.vis.set(leaf as usize);
+        self.vis.cells.set(leaf as usize);
         self.on_stack.set(leaf as usize);
         // The separating planes of this frame's source and pass, built once for all
         // the cell's portals (vis caches them the same way). They come from the source
@@ -210,20 +251,32 @@ impl State<'_> {
         for &q in &g.leaf_portals[leaf as usize] {
             let q = q as usize;
             let tp = &g.portals[q];
-            let to = tp.to as usize;
-            if !prev.might.get(to) || self.on_stack.get(to) {
+            if !prev.portals.get(q) || self.on_stack.get(tp.to as usize) {
                 continue;
             }
             let test = self.done[q].as_ref().unwrap_or(&self.mightsee[q]);
-            // Nothing behind this portal that is not seen already: skip it (vis).
+            // Nothing behind this portal that is not seen already: skip it (vis), and
+            // count every portal behind it as crossed (the flow's portal set bounds
+            // later flows through this portal, so it must stay a superset).
             let more = prev
-                .might
+                .cells
                 .0
                 .iter()
-                .zip(&test.0)
-                .zip(&self.vis.0)
+                .zip(&test.cells.0)
+                .zip(&self.vis.cells.0)
                 .any(|((a, b), v)| a & b & !v != 0);
             if !more {
+                self.vis.portals.set(q);
+                for ((v, a), b) in self
+                    .vis
+                    .portals
+                    .0
+                    .iter_mut()
+                    .zip(&prev.portals.0)
+                    .zip(&test.portals.0)
+                {
+                    *v |= a & b;
+                }
                 continue;
             }
             // The next portal in front of the source portal.
@@ -262,19 +315,13 @@ impl State<'_> {
                 };
                 source = src;
             }
-            let might = Bits(
-                prev.might
-                    .0
-                    .iter()
-                    .zip(&test.0)
-                    .map(|(a, b)| a & b)
-                    .collect(),
-            );
+            self.vis.portals.set(q);
             let frame = Frame {
                 source,
                 pass: Some(pass),
                 plane: tp.plane,
-                might: std::borrow::Cow::Owned(might),
+                cells: std::borrow::Cow::Owned(and(&prev.cells, &test.cells)),
+                portals: std::borrow::Cow::Owned(and(&prev.portals, &test.portals)),
             };
             self.recurse(tp.to, &frame);
         }

@@ -39,7 +39,7 @@ pub use cells::leaf_cells;
 pub use method::PortalMethod;
 
 use bits::Bits;
-use flow::{DirPortal, Graph};
+use flow::{DirPortal, Graph, Seen};
 use portalize::Portal;
 use rayon::prelude::*;
 use sightline_geom::DVec3;
@@ -76,11 +76,11 @@ pub struct Portals {
     portals: Vec<Portal>,
     graph: Graph,
     /// Base flood of each directed portal.
-    mightsee: Vec<Bits>,
+    mightsee: Vec<Seen>,
     /// Each face's polygon and front plane; two-sided liquid surfaces flagged.
     faces: Vec<(Winding, Plane, bool)>,
     /// Flow result of every directed portal, computed on first use.
-    flows: std::sync::OnceLock<Vec<Bits>>,
+    flows: std::sync::OnceLock<Vec<Seen>>,
 }
 
 impl Portals {
@@ -144,15 +144,22 @@ impl Portals {
     /// by the base floods: no level-wide precomputation, looser than [`Portals::solve`]
     /// and still conservative.
     pub fn solve_local(&self, leaf: u32) -> LeafPvs {
-        let n = self.graph.portals.len();
-        let none = vec![None; n];
-        let mut vis = vec![Bits::new(0); n];
-        if let Some(out) = self.graph.leaf_portals.get(leaf as usize) {
-            for &p in out {
-                vis[p as usize] = flow::flow(&self.graph, p as usize, &self.mightsee, &none);
-            }
-        }
-        self.leaf_pvs(leaf, &vis, Mode::Full)
+        let none = vec![None; self.graph.portals.len()];
+        let own: Vec<(u32, Seen)> = self
+            .graph
+            .leaf_portals
+            .get(leaf as usize)
+            .map(|out| {
+                out.iter()
+                    .map(|&p| {
+                        let f = flow::flow(&self.graph, p as usize, &self.mightsee, &none);
+                        (p, f)
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        let v: Vec<(u32, &Seen)> = own.iter().map(|(p, f)| (*p, f)).collect();
+        self.assemble(leaf, &v, Mode::Full)
     }
 
     /// The PVS of every leaf `0 ..= visleafs`, in leaf order (leaf 0 and other
@@ -165,9 +172,8 @@ impl Portals {
             .collect()
     }
 
-    /// The portals seen through each directed portal: its base flood (`Fast`) or its
-    /// flow (`Full`).
-    pub fn portal_sets(&self, mode: Mode) -> &[Bits] {
+    /// What each directed portal sees: its base flood (`Fast`) or its flow (`Full`).
+    pub fn portal_sets(&self, mode: Mode) -> &[Seen] {
         match mode {
             Mode::Fast => &self.mightsee,
             Mode::Full => self
@@ -176,8 +182,8 @@ impl Portals {
         }
     }
 
-    fn leaf_pvs(&self, leaf: u32, vis: &[Bits], mode: Mode) -> LeafPvs {
-        let v: Vec<(u32, &Bits)> = self
+    fn leaf_pvs(&self, leaf: u32, vis: &[Seen], mode: Mode) -> LeafPvs {
+        let v: Vec<(u32, &Seen)> = self
             .graph
             .leaf_portals
             .get(leaf as usize)
@@ -186,12 +192,11 @@ impl Portals {
         self.assemble(leaf, &v, mode)
     }
 
-    /// Leaves and faces of `leaf` from the cell sets of its outgoing portals. A face of
-    /// a leaf `l` seen through portal `p` (beyond `p`'s own leaf) is kept when a line
-    /// through `p` and then some portal `q` into `l` can reach it; every line into `l`
-    /// enters by such a `q`, from a leaf that `p` sees and through a portal that `p`'s
-    /// flood tests pass, so only those are tried.
-    fn assemble(&self, leaf: u32, vis: &[(u32, &Bits)], mode: Mode) -> LeafPvs {
+    /// Leaves and faces of `leaf` from what its outgoing portals see. A face of a leaf
+    /// entered by portal `q` (beyond the source portal `p`'s own leaf) is kept when a
+    /// line through `p` and then `q` can reach it; every line through `p` into that
+    /// leaf enters by a portal of `p`'s portal set.
+    fn assemble(&self, leaf: u32, vis: &[(u32, &Seen)], mode: Mode) -> LeafPvs {
         let level = &self.level;
         let g = &self.graph;
         let mut leaves = Bits::new(level.leaves.len());
@@ -205,40 +210,31 @@ impl Portals {
         mark_all(&mut faces, leaf as usize);
         for (p, v) in vis {
             let pp = &g.portals[*p as usize];
-            leaves.or(v);
+            leaves.or(&v.cells);
             mark_all(&mut faces, pp.to as usize);
-            for l in v.ones() {
+            for q in v.portals.ones() {
+                let qp = &g.portals[q];
+                let l = qp.to as usize;
                 let lf = &level.leaves[l].faces;
-                if l == pp.to as usize || lf.iter().all(|&f| faces.get(f as usize)) {
+                if lf.iter().all(|&f| faces.get(f as usize)) {
                     continue;
                 }
                 if mode == Mode::Fast {
                     mark_all(&mut faces, l);
                     continue;
                 }
-                for &out in &g.leaf_portals[l] {
-                    // The reverse of an outgoing portal of `l` leads into `l`.
-                    let q = (out ^ 1) as usize;
-                    let qp = &g.portals[q];
-                    if !v.get(qp.from as usize)
-                        || !qp.winding.any_front(&pp.plane, flow::FLOOD_EPSILON)
-                        || !pp.winding.any_back(&qp.plane, flow::FLOOD_EPSILON)
-                    {
+                // Lines through p then q: p's part behind q, separating planes of both.
+                let Some(source) = pp.winding.clip(&qp.plane.flipped(), ON_EPSILON) else {
+                    continue;
+                };
+                let mut seps = flow::separators(&source, &qp.winding, false);
+                seps.extend(flow::separators(&qp.winding, &source, true));
+                for &f in lf {
+                    if faces.get(f as usize) {
                         continue;
                     }
-                    // Lines through p then q: p's part behind q, separating planes of both.
-                    let Some(source) = pp.winding.clip(&qp.plane.flipped(), ON_EPSILON) else {
-                        continue;
-                    };
-                    let mut seps = flow::separators(&source, &qp.winding, false);
-                    seps.extend(flow::separators(&qp.winding, &source, true));
-                    for &f in lf {
-                        if faces.get(f as usize) {
-                            continue;
-                        }
-                        if self.face_reachable(&source, pp, qp, &seps, f as usize) {
-                            faces.set(f as usize);
-                        }
+                    if self.face_reachable(&source, pp, qp, &seps, f as usize) {
+                        faces.set(f as usize);
                     }
                 }
             }

@@ -40,7 +40,10 @@ impl PortalMethod {
     pub fn leaf_pvs(&self, leaf: u32) -> LeafPvs {
         match self.cache.get(leaf as usize) {
             Some(c) => c
-                .get_or_init(|| self.portals.solve(leaf, self.mode))
+                .get_or_init(|| match self.mode {
+                    Mode::Full => self.portals.solve_local(leaf),
+                    Mode::Fast => self.portals.solve(leaf, Mode::Fast),
+                })
                 .clone(),
             None => LeafPvs {
                 leaf,

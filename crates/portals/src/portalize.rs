@@ -3,14 +3,12 @@
 //! ancestors, is split down both of the node's subtrees; a piece that ends in an open
 //! leaf on each side is a portal between the two leaves.
 //!
-//! Clipping and splitting keep points within [`TOUCH_EPSILON`] on both sides, so pieces
-//! overlap by the float noise of the level's coordinates and no more: no opening between
-//! two open leaves is ever left without a portal, however thin (a missing portal would
-//! be a missed view), and no sliver of the clipping margin becomes a portal between
-//! leaves that only meet at an edge. Solid and sky leaves block sight; empty space and
-//! the liquids (water, slime, lava) pass it.
+//! Splitting keeps points within [`SPLIT_EPSILON`] on both sides, so pieces overlap by a
+//! hair instead of losing one: no opening between two open leaves is ever left without
+//! a portal, however thin (a missing portal would be a missed view). Solid and sky
+//! leaves block sight; empty space and the liquids (water, slime, lava) pass it.
 
-use crate::winding::{Plane, Winding, TOUCH_EPSILON};
+use crate::winding::{Plane, Winding};
 use sightline_geom::DVec3;
 use sightline_scene::import::bsp::{BspLevel, Child};
 
@@ -22,6 +20,13 @@ pub struct Portal {
     pub plane: Plane,
     pub leaves: [u32; 2],
 }
+
+/// Overlap (Quake units) of the pieces of a split, qbsp's `ON_EPSILON`. An exact split
+/// (0.001) makes 17 % fewer portals and a 30 % faster flow, but a looser PVS (Σ|PVS| /
+/// Σ|vis| on dm2 1.16 instead of 1.08, dm3 1.05 instead of 1.03, e1m1 1.065 instead of
+/// 1.048): the extra cuts give the flow smaller pieces, and smaller passes give tighter
+/// separating planes.
+pub const SPLIT_EPSILON: f64 = 0.1;
 
 /// Margin (Quake units) of the box around the level's leaves.
 const BOX_MARGIN: f64 = 64.0;
@@ -60,7 +65,7 @@ fn walk(level: &BspLevel, c: Child, ancestors: &mut Vec<Plane>, size: f64, out: 
     let plane = Plane::new(DVec3::from(p.normal), p.dist);
     let mut w = Some(Winding::base_for_plane(&plane, size));
     for a in ancestors.iter() {
-        w = w.and_then(|w| w.clip(a, TOUCH_EPSILON));
+        w = w.and_then(|w| w.clip(a, SPLIT_EPSILON));
     }
     if let Some(w) = w {
         let mut fronts = Vec::new();
@@ -102,7 +107,7 @@ fn push_down(level: &BspLevel, c: Child, w: Winding, out: &mut Vec<(u32, Winding
             let node = &level.nodes[n as usize];
             let p = level.planes[node.plane as usize];
             let plane = Plane::new(DVec3::from(p.normal), p.dist);
-            let (f, b) = w.split(&plane, TOUCH_EPSILON);
+            let (f, b) = w.split(&plane, SPLIT_EPSILON);
             if let Some(f) = f {
                 push_down(level, node.children[0], f, out);
             }
