@@ -277,6 +277,13 @@ pub enum Command {
         /// Comma-separated method names (default: all conservative methods; listed below).
         #[arg(long)]
         methods: Option<String>,
+        /// Quake levels of the indoor section: `.bsp` files or folders of them, repeatable
+        /// (default: `data/quake` when it exists).
+        #[arg(long)]
+        levels: Vec<PathBuf>,
+        /// Run only the indoor section (no city experiments).
+        #[arg(long)]
+        indoor_only: bool,
         #[arg(short, long, default_value = "report")]
         out: PathBuf,
     },
