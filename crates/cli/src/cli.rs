@@ -251,13 +251,17 @@ pub enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Top-down PNG of a scene with a cell's PVS classified against the ground truth.
+    /// Top-down PNG of a scene with a cell's PVS classified against the ground truth
+    /// (a .bsp level: its plan with the PVS of the leaf holding --at).
     #[command(after_help = methods_help())]
     Map {
         #[command(flatten)]
         scene: SceneArg,
-        #[arg(long, value_parser = parse_cell, allow_hyphen_values = true)]
-        cell: ViewCell,
+        #[arg(long, value_parser = parse_cell, allow_hyphen_values = true, required_unless_present = "at")]
+        cell: Option<ViewCell>,
+        /// BSP levels with `portals`/`portals-fast`: the leaf holding `X,Y,Z`.
+        #[arg(long, value_parser = parse_point, allow_hyphen_values = true, conflicts_with = "cell")]
+        at: Option<[f64; 3]>,
         /// The method (listed below).
         #[arg(long)]
         method: Option<String>,
