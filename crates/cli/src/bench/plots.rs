@@ -31,6 +31,9 @@ fn tick(v: f64, scale: Scale) -> String {
             return String::new();
         }
     }
+    if v == 0.0 {
+        return "0".into();
+    }
     if v.abs() >= 10.0 || (v.fract() == 0.0 && v.abs() >= 1.0) {
         let n = v.round() as i64;
         let digits = n.unsigned_abs().to_string();
@@ -232,6 +235,7 @@ mod tests {
         assert_eq!(tick(2.5, Scale::Linear), "2.50");
         assert_eq!(tick(150_000.0, Scale::Linear), "150 000");
         assert_eq!(tick(-12.0, Scale::Linear), "-12");
+        assert_eq!(tick(0.0, Scale::Linear), "0");
     }
 
     #[test]
