@@ -285,3 +285,16 @@ fn map_of_a_level_shows_visible_and_culled_floors() {
         assert_eq!(err.trim().lines().count(), 1, "{err}");
     }
 }
+
+#[test]
+fn bench_levels_that_do_not_exist_are_one_line_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("report").to_string_lossy().into_owned();
+    let empty = dir.path().to_string_lossy().into_owned();
+    for levels in ["/nonexistent/level.bsp", empty.as_str()] {
+        let (code, _, err) = sightline(&["bench", "--indoor-only", "--levels", levels, "-o", &out]);
+        assert_ne!(code, 0);
+        assert!(err.starts_with("error: "), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+}
