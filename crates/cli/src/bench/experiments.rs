@@ -831,21 +831,27 @@ pub fn run(
         ));
         experiments.push(("scaling", Box::new(|b, r| scaling(b, &names, r, out))));
     }
+    // One experiment per level, so that raw.json is written after each (a long run that
+    // is stopped keeps its levels), then the section.
+    let level_names: Vec<String> = sections
+        .levels
+        .iter()
+        .map(|p| format!("indoor {}", p.display()))
+        .collect();
+    for (path, name) in sections.levels.iter().zip(&level_names) {
+        experiments.push((
+            name.as_str(),
+            Box::new(move |b, _| {
+                let (suite, quiet) = (b.suite.clone(), b.quiet);
+                super::indoor::measure_into(&suite, path, &mut b.indoor, &mut b.notes, quiet);
+                Ok(())
+            }),
+        ));
+    }
     if !sections.levels.is_empty() {
         experiments.push((
-            "indoor",
-            Box::new(|b, r| {
-                let (suite, quiet) = (b.suite.clone(), b.quiet);
-                super::indoor::section(
-                    &suite,
-                    &sections.levels,
-                    &mut b.indoor,
-                    &mut b.notes,
-                    r,
-                    out,
-                    quiet,
-                )
-            }),
+            "indoor report",
+            Box::new(|b, r| super::indoor::write_section(&b.suite, &b.indoor, r, out)),
         ));
     }
     anyhow::ensure!(

@@ -142,44 +142,45 @@ pub fn measure_level(path: &Path, repeats: usize, sources: usize) -> anyhow::Res
     })
 }
 
-/// Measure every level of `paths` and write the section (table and plots into `out`).
-pub fn section(
+/// Measure the level at `path` into `records` (a failure or a miss becomes a note).
+pub fn measure_into(
     suite: &Suite,
-    paths: &[PathBuf],
+    path: &Path,
     records: &mut Vec<IndoorRecord>,
     notes: &mut Vec<String>,
+    quiet: bool,
+) {
+    if !quiet {
+        eprintln!("bench: indoor {}", path.display());
+    }
+    match measure_level(path, suite.timing_repeats, suite.indoor_sources) {
+        Ok(r) => {
+            if r.full.missed_pairs > 0 {
+                notes.push(format!(
+                    "`portals` MISSED {} visible leaf pairs on {} (a conservativeness bug)",
+                    r.full.missed_pairs, r.level
+                ));
+            }
+            if !r.fast_contains_full {
+                notes.push(format!(
+                    "`portals-fast` does not contain `portals` on {}",
+                    r.level
+                ));
+            }
+            records.push(r);
+        }
+        Err(e) => notes.push(format!("indoor: {}: {e:#}", path.display())),
+    }
+}
+
+/// The section of the levels measured: the table, and the plots written into `out`.
+pub fn write_section(
+    suite: &Suite,
+    records: &[IndoorRecord],
     rep: &mut Report,
     out: &Path,
-    quiet: bool,
 ) -> anyhow::Result<()> {
     rep.section("Indoor: cells and portals on Quake levels");
-    if paths.is_empty() {
-        rep.para("No level given (`--levels LEVEL.bsp|FOLDER`; by default `data/quake` when it exists): section skipped.");
-        return Ok(());
-    }
-    for p in paths {
-        if !quiet {
-            eprintln!("bench: indoor {}", p.display());
-        }
-        match measure_level(p, suite.timing_repeats, suite.indoor_sources) {
-            Ok(r) => {
-                if r.full.missed_pairs > 0 {
-                    notes.push(format!(
-                        "`portals` MISSED {} visible leaf pairs on {} (a conservativeness bug)",
-                        r.full.missed_pairs, r.level
-                    ));
-                }
-                if !r.fast_contains_full {
-                    notes.push(format!(
-                        "`portals-fast` does not contain `portals` on {}",
-                        r.level
-                    ));
-                }
-                records.push(r);
-            }
-            Err(e) => notes.push(format!("indoor: {}: {e:#}", p.display())),
-        }
-    }
     let threads = rayon::current_num_threads();
     rep.para(&format!(
         "Each level's leaves are its cells (`sightline_portals`). Times are wall times on {threads} rayon threads, the median of up to {} runs (a run whose full solve passes {NO_REPEAT_MS} ms is not repeated), each from a fresh `Portals`: *portals* = portalization and base flood, *fast* = that plus every leaf's `portals-fast` set, *full* = that plus the flow through portal sequences and every leaf's `portals` set. Σ ratios are over every view leaf against the level's own `vis` rows; *faces* is our faces over the faces of the leaves `vis` sees. The oracle traces random segments from {} source leaves to every leaf our PVS lacks ({SEGMENTS} per pair, 256 for pairs `vis` has): *missed* must be 0. Peak memory is the process's high-water mark while the level ran.",
@@ -204,7 +205,7 @@ pub fn section(
         "missed",
         "vis-only pairs (clear)",
     ]);
-    for r in records.iter() {
+    for r in records {
         t.row(vec![
             r.level.clone(),
             r.leaves.to_string(),
@@ -289,16 +290,10 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let mut rep = Report::new(&suite, &Machine::detect());
         let (mut records, mut notes) = (Vec::new(), Vec::new());
-        section(
-            &suite,
-            &find_levels(&[dm1]).unwrap(),
-            &mut records,
-            &mut notes,
-            &mut rep,
-            dir.path(),
-            true,
-        )
-        .unwrap();
+        for level in find_levels(&[dm1]).unwrap() {
+            measure_into(&suite, &level, &mut records, &mut notes, true);
+        }
+        write_section(&suite, &records, &mut rep, dir.path()).unwrap();
         assert!(notes.is_empty(), "{notes:?}");
         let r = &records[0];
         assert_eq!((r.level.as_str(), r.visleafs), ("dm1", 434));
