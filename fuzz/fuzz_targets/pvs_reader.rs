@@ -12,6 +12,7 @@ fuzz_target!(|data: &[u8]| {
         for (i, c) in file.cells().iter().enumerate().take(64) {
             let _ = file.query(c.center());
             let _ = file.pvs(i);
+            let _ = file.visible_leaves(i);
         }
         let _ = file.query(DVec3::new(0.0, 0.0, 0.0));
     }

@@ -139,7 +139,9 @@ def write_cells(cells: CellsLike, path: PathLike) -> None:
 
 
 class Scene:
-    """A city scene: objects (ids = input order), bounds and import warnings.
+    """A scene: objects (ids = input order), bounds and import warnings. A Quake level
+    (``.bsp``) loads its world faces as the objects (id = face index) and keeps its BSP
+    tree for the portal methods (``"portals"``, ``"portals-fast"``).
 
     Prepared methods are cached on the scene per (method, options), so repeated
     :meth:`pvs` calls prepare nothing twice.
@@ -315,6 +317,28 @@ class Scene:
         """
         report = json.loads(self._native.truth_json(_cell(cell), samples, resolution))
         report["visible"] = np.asarray(report["visible"], dtype=np.uint32)
+        return report
+
+    def pvs_at(self, point: Sequence[float], method: str = "portals") -> dict:
+        """BSP levels: the PVS of the leaf holding ``point`` with ``"portals"`` or
+        ``"portals-fast"``, as ``sightline pvs LEVEL.bsp --at X,Y,Z --json``: ``"leaf"``
+        (the BSP leaf number), ``"visible"`` (face ids) and ``"visible_leaves"`` (leaf
+        numbers), both uint32 arrays. A point in a wall or outside the level raises
+        :class:`CellError`.
+
+        >>> level = sightline.Scene.from_file("data/quake/dm1.bsp")             # doctest: +SKIP
+        >>> level.pvs_at([200, 1000, 50], method="portals")["visible_leaves"]    # doctest: +SKIP
+        array([  5,   6, ...], dtype=uint32)
+        """
+        try:
+            p = [float(c) for c in point]
+        except (TypeError, ValueError) as e:
+            raise CellError(f"a point is 3 numbers x, y, z, got {point!r}") from e
+        if len(p) != 3:
+            raise CellError(f"a point is 3 numbers x, y, z, got {point!r}")
+        report = json.loads(self._native.pvs_at_json(p, method))
+        for key in ("visible", "visible_leaves"):
+            report[key] = np.asarray(report[key], dtype=np.uint32)
         return report
 
 

@@ -55,6 +55,7 @@ class NativeScene:
     def truth_json(
         self, cell: Sequence[float], samples: Optional[int] = None, resolution: Optional[int] = None
     ) -> str: ...
+    def pvs_at_json(self, point: Sequence[float], method: str) -> str: ...
 
 class NativePvsFile:
     @staticmethod

@@ -8,6 +8,8 @@ use rayon::prelude::*;
 use sightline_core::check::{TruthOptions, TruthScene};
 use sightline_geom::ViewCell;
 use sightline_methods::{MethodOptions, VisibilityMethod};
+use sightline_portals::{Mode, PortalMethod, Portals};
+use sightline_scene::import::bsp::BspLevel;
 use sightline_scene::import::{Crs, ImportOptions};
 use sightline_scene::{cells, Scene};
 use std::collections::HashMap;
@@ -31,6 +33,19 @@ pub struct NativeScene {
     truth: OnceLock<Arc<TruthScene>>,
     /// Occluders and occludees for from-point culling, prepared on first use.
     culling: OnceLock<Arc<sightline_culling::CullScene>>,
+    /// A Quake level (`.bsp`): its tree, for the portal methods.
+    level: Option<Arc<BspLevel>>,
+    /// `portals` and `portals-fast` prepared on the level, on first use.
+    portal_methods: Mutex<HashMap<&'static str, Arc<PortalMethod>>>,
+}
+
+/// The portal mode of a method name, if it is a portal method.
+fn portal_mode(method: &str) -> Option<Mode> {
+    match method.parse::<sightline_methods::Method>() {
+        Ok(sightline_methods::Method::Portals) => Some(Mode::Full),
+        Ok(sightline_methods::Method::PortalsFast) => Some(Mode::Fast),
+        _ => None,
+    }
 }
 
 fn crs(arg: Option<&str>) -> PyResult<Crs> {
@@ -195,12 +210,50 @@ impl NativeScene {
             methods: Mutex::new(HashMap::new()),
             truth: OnceLock::new(),
             culling: OnceLock::new(),
+            level: None,
+            portal_methods: Mutex::new(HashMap::new()),
         }
+    }
+
+    /// `portals`/`portals-fast` on this scene's level, prepared on first use; an error
+    /// when the scene is not a BSP level. Call with the GIL released.
+    fn portal_method(&self, mode: Mode) -> PyResult<Arc<PortalMethod>> {
+        let name = match mode {
+            Mode::Full => sightline_methods::Method::Portals.name(),
+            Mode::Fast => sightline_methods::Method::PortalsFast.name(),
+        };
+        let Some(level) = &self.level else {
+            return Err(err(
+                Kind::Method,
+                format!(
+                    "{name} works on BSP levels (.bsp); {} is not one",
+                    self.name
+                ),
+            ));
+        };
+        let poisoned = || err(Kind::Method, "method cache poisoned");
+        if let Some(m) = self
+            .portal_methods
+            .lock()
+            .map_err(|_| poisoned())?
+            .get(name)
+        {
+            return Ok(m.clone());
+        }
+        let portals =
+            Portals::build(level).map_err(|e| err(Kind::Scene, format!("{}: {e}", self.name)))?;
+        let m = Arc::new(PortalMethod::new(portals, mode));
+        let mut cache = self.portal_methods.lock().map_err(|_| poisoned())?;
+        Ok(cache.entry(name).or_insert(m).clone())
     }
 
     /// The method prepared for this scene with `opts`, prepared on first use. Call with
     /// the GIL released: preparing can take seconds.
     pub fn method(&self, name: &str, opts: &MethodOptions) -> PyResult<Arc<dyn VisibilityMethod>> {
+        if let Some(mode) = portal_mode(name) {
+            let m: Arc<dyn VisibilityMethod> = self.portal_method(mode)?;
+            return Ok(m);
+        }
         let key = (
             name.to_string(),
             serde_json::to_string(opts).map_err(|e| err(Kind::Method, e.to_string()))?,
@@ -239,9 +292,24 @@ impl NativeScene {
             crs: crs(crs_name)?,
             strict,
         };
+        let is_bsp = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("bsp"));
+        let cannot = |e: &dyn std::fmt::Display| {
+            err(Kind::Scene, format!("cannot load {}: {e}", path.display()))
+        };
+        if is_bsp {
+            // A Quake level: the faces are the objects, the tree is kept for the
+            // portal methods.
+            let level = detached(py, || {
+                sightline_scene::import::bsp::load_bsp(&path).map_err(|e| cannot(&e))
+            })?;
+            let mut s = NativeScene::new(level.to_scene(), path.display().to_string());
+            s.level = Some(Arc::new(level));
+            return Ok(s);
+        }
         let scene = detached(py, || {
-            sightline_scene::import::load(&path, &opts)
-                .map_err(|e| err(Kind::Scene, format!("cannot load {}: {e}", path.display())))
+            sightline_scene::import::load(&path, &opts).map_err(|e| cannot(&e))
         })?;
         Ok(NativeScene::new(scene, path.display().to_string()))
     }
@@ -281,9 +349,67 @@ impl NativeScene {
         &self.name
     }
 
-    /// The `sightline info --json` report, as JSON text.
-    fn info_json(&self) -> PyResult<String> {
-        let v = self.scene.info(self.name.clone());
+    /// The `sightline info --json` report, as JSON text; a BSP level adds `bsp` (leaves,
+    /// visleafs, open leaves, portals) as the CLI's.
+    fn info_json(&self, py: Python<'_>) -> PyResult<String> {
+        let mut v = serde_json::to_value(self.scene.info(self.name.clone()))
+            .map_err(|e| err(Kind::Scene, e))?;
+        if let Some(level) = &self.level {
+            let portals = detached(py, || self.portal_method(Mode::Fast))?
+                .portals()
+                .portals()
+                .len();
+            let bsp = serde_json::json!({
+                "leaves": level.leaves.len(),
+                "visleafs": level.visleafs,
+                "open_leaves": (1..=level.visleafs).filter(|&l| level.is_view_leaf(l)).count(),
+                "portals": portals,
+            });
+            if let Some(o) = v.as_object_mut() {
+                o.insert("bsp".into(), bsp);
+            }
+        }
+        serde_json::to_string(&v).map_err(|e| err(Kind::Scene, e))
+    }
+
+    /// BSP levels, `portals`/`portals-fast`: the PVS of the leaf holding `point`, as
+    /// `sightline pvs LEVEL.bsp --at X,Y,Z --json` (JSON text: `leaf`, `visible` face
+    /// ids, `visible_leaves` leaf numbers).
+    fn pvs_at_json(&self, py: Python<'_>, point: [f64; 3], method: &str) -> PyResult<String> {
+        let Some(mode) = portal_mode(method) else {
+            return Err(err(
+                Kind::Method,
+                format!(
+                    "pvs at a point needs a portal method (portals, portals-fast), got '{method}'"
+                ),
+            ));
+        };
+        if point.iter().any(|c| !c.is_finite()) {
+            return Err(err(Kind::Cell, format!("point {point:?} is not finite")));
+        }
+        let (leaf, pvs) = detached(py, || {
+            let m = self.portal_method(mode)?;
+            let level = m.portals().level();
+            let leaf = level.point_leaf(point);
+            if !level.is_view_leaf(leaf) {
+                return Err(err(
+                    Kind::Cell,
+                    format!(
+                        "point {},{},{} is not in open space (leaf {leaf} is solid, sky or outside the level)",
+                        point[0], point[1], point[2]
+                    ),
+                ));
+            }
+            Ok((leaf, m.leaf_pvs(leaf)))
+        })?;
+        let v = serde_json::json!({
+            "method": method,
+            "at": point,
+            "leaf": leaf,
+            "objects": self.scene.objects.len(),
+            "visible": pvs.faces,
+            "visible_leaves": pvs.leaves,
+        });
         serde_json::to_string(&v).map_err(|e| err(Kind::Scene, e))
     }
 

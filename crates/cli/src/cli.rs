@@ -251,13 +251,17 @@ pub enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Top-down PNG of a scene with a cell's PVS classified against the ground truth.
+    /// Top-down PNG of a scene with a cell's PVS classified against the ground truth
+    /// (a .bsp level: its plan with the PVS of the leaf holding --at).
     #[command(after_help = methods_help())]
     Map {
         #[command(flatten)]
         scene: SceneArg,
-        #[arg(long, value_parser = parse_cell, allow_hyphen_values = true)]
-        cell: ViewCell,
+        #[arg(long, value_parser = parse_cell, allow_hyphen_values = true, required_unless_present = "at")]
+        cell: Option<ViewCell>,
+        /// BSP levels with `portals`/`portals-fast`: the leaf holding `X,Y,Z`.
+        #[arg(long, value_parser = parse_point, allow_hyphen_values = true, conflicts_with = "cell")]
+        at: Option<[f64; 3]>,
         /// The method (listed below).
         #[arg(long)]
         method: Option<String>,
@@ -277,6 +281,13 @@ pub enum Command {
         /// Comma-separated method names (default: all conservative methods; listed below).
         #[arg(long)]
         methods: Option<String>,
+        /// Quake levels of the indoor section: `.bsp` files or folders of them, repeatable
+        /// (default: `data/quake` when it exists).
+        #[arg(long)]
+        levels: Vec<PathBuf>,
+        /// Run only the indoor section (no city experiments).
+        #[arg(long)]
+        indoor_only: bool,
         #[arg(short, long, default_value = "report")]
         out: PathBuf,
     },

@@ -153,6 +153,43 @@ fn build_and_query_a_level_by_its_leaves() {
     let v: serde_json::Value = serde_json::from_str(&v).unwrap();
     assert_eq!(q["leaf"], v["leaf"]);
     assert_eq!(q["visible"], v["visible"]);
+    assert_eq!(q["visible_leaves"], v["visible_leaves"]);
+    assert!(q["visible_leaves"]
+        .as_array()
+        .is_some_and(|l| !l.is_empty()));
+    // On random open points the file answers what `pvs --at` computes (the same
+    // library calls, in process): the leaf, its faces and its visible leaves.
+    assert!(file.has_visible_leaves());
+    let direct = sightline_portals::PortalMethod::new(
+        sightline_portals::Portals::build(&level).unwrap(),
+        sightline_portals::Mode::Fast,
+    );
+    let mut compared = 0;
+    while compared < 300 {
+        let p = [
+            lo.x + next() * (hi.x - lo.x),
+            lo.y + next() * (hi.y - lo.y),
+            lo.z + next() * (hi.z - lo.z),
+        ];
+        let leaf = level.point_leaf(p);
+        let near_plane = level
+            .nodes
+            .iter()
+            .any(|n| level.planes[n.plane as usize].distance(p).abs() < 1e-3);
+        if !level.is_view_leaf(leaf) || near_plane {
+            continue;
+        }
+        compared += 1;
+        let i = file.locate(sightline_geom::DVec3::from_array(p)).unwrap();
+        assert_eq!(file.cell(i).and_then(|c| c.id()), Some(leaf), "{p:?}");
+        let want = direct.leaf_pvs(leaf);
+        assert_eq!(file.pvs(i).unwrap(), want.faces, "{p:?} leaf {leaf}");
+        assert_eq!(
+            file.visible_leaves(i),
+            Some(want.leaves.as_slice()),
+            "{p:?}"
+        );
+    }
     // A cells file, shards or resume make no sense for a level: one-line errors.
     let (code, _, err) = sightline(&[
         "build",
@@ -194,4 +231,70 @@ fn check_a_level_against_its_own_vis_and_the_oracle() {
     let (code, _, err) = sightline(&["check", &dm1(), "--method", "erosion", "--reference", "vis"]);
     assert_ne!(code, 0);
     assert_eq!(err.trim().lines().count(), 1, "{err}");
+}
+
+#[test]
+fn map_of_a_level_shows_visible_and_culled_floors() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("map.png");
+    let out_s = out.to_string_lossy().into_owned();
+    let p = open_point();
+    let at = format!("{},{},{}", p[0], p[1], p[2]);
+    let (code, stdout, err) = sightline(&[
+        "map",
+        &dm1(),
+        "--at",
+        &at,
+        "--method",
+        "portals-fast",
+        "-o",
+        &out_s,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        stdout.contains("faces") && stdout.contains("leaves"),
+        "{stdout}"
+    );
+    let img = image::open(&out).unwrap().to_rgb8();
+    // Above the legend (130 px): floors in the PVS (blue) and culled floors (grey).
+    let count = |c: [u8; 3]| {
+        img.enumerate_pixels()
+            .filter(|(_, y, px)| *y + 130 < img.height() && px.0 == c)
+            .count()
+    };
+    let (seen, culled) = (count([40, 90, 200]), count([215, 215, 215]));
+    assert!(seen > 1000 && culled > 1000, "{seen} {culled}");
+    // A point in a wall, a city method, no --at: one-line errors.
+    for args in [
+        vec!["map", &dm1(), "--at", "1e5,1e5,1e5", "-o", &out_s],
+        vec![
+            "map",
+            &dm1(),
+            "--at",
+            &at,
+            "--method",
+            "erosion",
+            "-o",
+            &out_s,
+        ],
+        vec!["map", &dm1(), "--cell", "0,0,0,1,1,1", "-o", &out_s],
+    ] {
+        let (code, _, err) = sightline(&args);
+        assert_ne!(code, 0, "{args:?}");
+        assert!(err.starts_with("error: "), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+}
+
+#[test]
+fn bench_levels_that_do_not_exist_are_one_line_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("report").to_string_lossy().into_owned();
+    let empty = dir.path().to_string_lossy().into_owned();
+    for levels in ["/nonexistent/level.bsp", empty.as_str()] {
+        let (code, _, err) = sightline(&["bench", "--indoor-only", "--levels", levels, "-o", &out]);
+        assert_ne!(code, 0);
+        assert!(err.starts_with("error: "), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
 }

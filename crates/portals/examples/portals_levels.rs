@@ -8,6 +8,10 @@
 //! Without arguments: every `../shared/data/quake/*.bsp` (else `data/quake/*.bsp`).
 //! `PORTALS_SOURCES` (default 60) source leaves are checked against the oracle: 16
 //! segments per pair outside both PVS, 256 per pair the reference has and we lack.
+//!
+//! The product form of this table, with plots and medians of repeated runs, is
+//! `sightline bench --indoor-only --levels FOLDER` (same figures, from
+//! `sightline_portals::reference`).
 
 use sightline_portals::reference::compare_with_reference;
 use sightline_portals::{Mode, Portals};

@@ -5,6 +5,7 @@
 use crate::oracle::{pair_visible, sample_leaf, Rng};
 use crate::{LeafPvs, Mode, Portals};
 use serde::Serialize;
+use sightline_scene::import::bsp::BspLevel;
 
 /// The comparison of one level's leaf and face PVS with its reference and the oracle.
 #[derive(Clone, Debug, Default, Serialize)]
@@ -38,6 +39,51 @@ impl VisReport {
     }
 }
 
+/// One view leaf's PVS sizes next to the reference's (the points of `bench`'s plot).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct LeafSizes {
+    pub leaf: u32,
+    /// |PVS| in leaves, and the reference row's size.
+    pub leaves_ours: usize,
+    pub leaves_reference: usize,
+    /// Faces kept, and the faces of the reference's visible leaves.
+    pub faces_ours: usize,
+    pub faces_reference: usize,
+}
+
+/// The sizes of every view leaf's PVS (`all`, indexed by leaf as
+/// [`Portals::solve_all`] gives them) against the level's reference rows, ascending by
+/// leaf. Leaves `all` does not cover are skipped.
+pub fn leaf_sizes(level: &BspLevel, all: &[LeafPvs]) -> Vec<LeafSizes> {
+    view_leaves(level)
+        .into_iter()
+        .filter_map(|leaf| {
+            let ours = all.get(leaf as usize)?;
+            let row = level.reference_row(leaf);
+            let mut ref_faces: Vec<u32> = row
+                .iter()
+                .filter_map(|&l| level.leaves.get(l as usize))
+                .flat_map(|l| l.faces.iter().copied())
+                .collect();
+            ref_faces.sort_unstable();
+            ref_faces.dedup();
+            Some(LeafSizes {
+                leaf,
+                leaves_ours: ours.leaves.len(),
+                leaves_reference: row.len(),
+                faces_ours: ours.faces.len(),
+                faces_reference: ref_faces.len(),
+            })
+        })
+        .collect()
+}
+
+fn view_leaves(level: &BspLevel) -> Vec<u32> {
+    (1..=level.visleafs)
+        .filter(|&l| level.is_view_leaf(l))
+        .collect()
+}
+
 /// Compare the PVS of every view leaf (`mode`) with the reference, and `sources` source
 /// leaves (spread evenly) with the oracle: `segments` random segments per pair we call
 /// hidden (256 at least for the pairs the reference has).
@@ -48,8 +94,24 @@ pub fn compare_with_reference(
     segments: usize,
 ) -> VisReport {
     let t = std::time::Instant::now();
-    let level = portals.level();
     let all: Vec<LeafPvs> = portals.solve_all(mode);
+    let mut r = compare_sets(portals, &all, mode, sources, segments);
+    r.seconds = t.elapsed().as_secs_f64();
+    r
+}
+
+/// [`compare_with_reference`] on sets already solved (`all`, indexed by leaf, as
+/// [`Portals::solve_all`]`(mode)` gives them): for callers that time the solve
+/// themselves. `seconds` is the comparison's own time.
+pub fn compare_sets(
+    portals: &Portals,
+    all: &[LeafPvs],
+    mode: Mode,
+    sources: usize,
+    segments: usize,
+) -> VisReport {
+    let t = std::time::Instant::now();
+    let level = portals.level();
     let mut r = VisReport {
         visleafs: level.visleafs,
         portals: portals.portals().len(),
@@ -59,26 +121,13 @@ pub fn compare_with_reference(
         },
         ..VisReport::default()
     };
-    let open: Vec<u32> = (1..=level.visleafs)
-        .filter(|&l| level.is_view_leaf(l))
-        .collect();
-    for &leaf in &open {
-        let row = level.reference_row(leaf);
-        let Some(ours) = all.get(leaf as usize) else {
-            continue;
-        };
-        r.leaves_ours += ours.leaves.len();
-        r.leaves_reference += row.len();
-        r.faces_ours += ours.faces.len();
-        let mut ref_faces: Vec<u32> = row
-            .iter()
-            .filter_map(|&l| level.leaves.get(l as usize))
-            .flat_map(|l| l.faces.iter().copied())
-            .collect();
-        ref_faces.sort_unstable();
-        ref_faces.dedup();
-        r.faces_reference += ref_faces.len();
+    for s in leaf_sizes(level, all) {
+        r.leaves_ours += s.leaves_ours;
+        r.leaves_reference += s.leaves_reference;
+        r.faces_ours += s.faces_ours;
+        r.faces_reference += s.faces_reference;
     }
+    let open = view_leaves(level);
     let mut rng = Rng::new(7);
     let points: Vec<Vec<[f64; 3]>> = (0..=level.visleafs)
         .map(|l| {
@@ -94,7 +143,9 @@ pub fn compare_with_reference(
     for i in 0..k {
         let s = open[i * open.len() / k];
         let row = level.reference_row(s);
-        let pvs = &all[s as usize];
+        let Some(pvs) = all.get(s as usize) else {
+            continue;
+        };
         for &other in &open {
             if pvs.leaves.binary_search(&other).is_ok() {
                 continue;

@@ -1,4 +1,4 @@
-//! The `.pvs` file format, version 1 (documented in `docs/pvs-format.md`).
+//! The `.pvs` file format, versions 1 and 2 (documented in `docs/pvs-format.md`).
 //!
 //! ```text
 //! preamble   magic "SLPVS\0\r\n" | version u16 | section count u16
@@ -7,6 +7,8 @@
 //! HEAD       postcard(Header): scene fingerprint, method, params, object and cell counts, shard
 //! CELL       zstd(postcard(CellTable)): boxes (columns), per-cell reference/block/offset/len/count, blocks
 //! GRID       zstd(postcard(Grid)): the spatial index
+//! SHAP       (version 2, optional) zstd(postcard(ShapeTable)): cells that are not boxes
+//! LEAF       (version 2, optional) zstd(postcard(LeafTable)): each stored cell's visible leaves
 //! DATA       zstd frames, one per block of cells; a block is the concatenated roaring payloads
 //! ```
 //!
@@ -18,6 +20,7 @@ use crate::crc::crc32;
 use crate::delta::{choose_references, MAX_CHAIN};
 use crate::error::PvsError;
 use crate::index::Grid;
+use crate::leaves::LeafTable;
 use crate::partition::Shard;
 use crate::shapes::ShapeTable;
 use rayon::prelude::*;
@@ -40,6 +43,7 @@ pub(crate) const TAG_CELL: [u8; 4] = *b"CELL";
 pub(crate) const TAG_GRID: [u8; 4] = *b"GRID";
 pub(crate) const TAG_DATA: [u8; 4] = *b"DATA";
 pub(crate) const TAG_SHAP: [u8; 4] = *b"SHAP";
+pub(crate) const TAG_LEAF: [u8; 4] = *b"LEAF";
 pub(crate) const CODEC_RAW: u32 = 0;
 pub(crate) const CODEC_ZSTD: u32 = 1;
 pub(crate) const DIR_ENTRY_LEN: usize = 36;
@@ -181,7 +185,7 @@ pub fn encode_with(
     sets: &[RoaringBitmap],
     opts: &EncodeOptions,
 ) -> Result<Vec<u8>, PvsError> {
-    encode_shaped(header, cells, None, present, sets, opts)
+    encode_shaped(header, cells, Extra::default(), present, sets, opts)
 }
 
 /// [`encode_with`] for cells of any kind ([`Cell`]: boxes, convex polyhedra, voxel
@@ -195,24 +199,61 @@ pub fn encode_cells(
     sets: &[RoaringBitmap],
     opts: &EncodeOptions,
 ) -> Result<Vec<u8>, PvsError> {
+    encode_cells_with_leaves(header, cells, present, sets, None, opts)
+}
+
+/// [`encode_cells`] with, optionally, each stored cell's visible leaves (`leaves[k]`
+/// for `present[k]`, sorted ascending): the numbers of the cells it sees in its source,
+/// e.g. a BSP level's leaf PVS next to its face PVS. They go into the LEAF section
+/// (format version 2); `None` writes exactly what [`encode_cells`] writes.
+pub fn encode_cells_with_leaves(
+    header: &Header,
+    cells: &[Cell],
+    present: &[u32],
+    sets: &[RoaringBitmap],
+    leaves: Option<&[Vec<u32>]>,
+    opts: &EncodeOptions,
+) -> Result<Vec<u8>, PvsError> {
     let bounds: Vec<ViewCell> = cells.iter().map(Cell::bounds).collect();
     let shapes = ShapeTable::of(cells);
-    encode_shaped(header, &bounds, shapes.as_ref(), present, sets, opts)
+    let leaves = match leaves {
+        Some(l) if l.len() != sets.len() => {
+            return Err(PvsError::Invalid(format!(
+                "{} visible-leaf sets for {} stored cells",
+                l.len(),
+                sets.len()
+            )))
+        }
+        Some(l) => Some(LeafTable::of(l)?),
+        None => None,
+    };
+    let extra = Extra {
+        shapes: shapes.as_ref(),
+        leaves: leaves.as_ref(),
+    };
+    encode_shaped(header, &bounds, extra, present, sets, opts)
+}
+
+/// The optional sections of version 2.
+#[derive(Clone, Copy, Default)]
+struct Extra<'a> {
+    shapes: Option<&'a ShapeTable>,
+    leaves: Option<&'a LeafTable>,
 }
 
 fn encode_shaped(
     header: &Header,
     cells: &[ViewCell],
-    shapes: Option<&ShapeTable>,
+    extra: Extra,
     present: &[u32],
     sets: &[RoaringBitmap],
     opts: &EncodeOptions,
 ) -> Result<Vec<u8>, PvsError> {
-    let whole = encode_layout(header, cells, shapes, present, sets, false)?;
+    let whole = encode_layout(header, cells, extra, present, sets, false)?;
     if !opts.delta {
         return Ok(whole);
     }
-    let delta = encode_layout(header, cells, shapes, present, sets, true)?;
+    let delta = encode_layout(header, cells, extra, present, sets, true)?;
     Ok(if delta.len() < whole.len() {
         delta
     } else {
@@ -223,7 +264,7 @@ fn encode_shaped(
 fn encode_layout(
     header: &Header,
     cells: &[ViewCell],
-    shapes: Option<&ShapeTable>,
+    extra: Extra,
     present: &[u32],
     sets: &[RoaringBitmap],
     delta: bool,
@@ -368,12 +409,16 @@ fn encode_layout(
             grid_raw.len() as u64,
         ),
     ];
-    if let Some(t) = shapes {
+    if let Some(t) = extra.shapes {
         let raw = postcard_bytes(t)?;
         sections.push((TAG_SHAP, CODEC_ZSTD, zstd(&raw)?, raw.len() as u64));
     }
+    if let Some(t) = extra.leaves {
+        let raw = postcard_bytes(t)?;
+        sections.push((TAG_LEAF, CODEC_ZSTD, zstd(&raw)?, raw.len() as u64));
+    }
     sections.push((TAG_DATA, CODEC_RAW, data, 0));
-    let version = if shapes.is_some() {
+    let version = if extra.shapes.is_some() || extra.leaves.is_some() {
         FORMAT_VERSION
     } else {
         FORMAT_VERSION_BOXES

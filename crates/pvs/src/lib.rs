@@ -39,6 +39,7 @@ mod error;
 pub mod format;
 pub mod index;
 pub mod journal;
+mod leaves;
 mod partition;
 pub mod query;
 mod shapes;

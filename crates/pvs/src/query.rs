@@ -6,9 +6,10 @@ use crate::crc::crc32;
 use crate::error::PvsError;
 use crate::format::{
     from_postcard, parse_preamble, section_payload, CellTable, Header, Section, CHAIN_LIMIT,
-    TAG_CELL, TAG_DATA, TAG_GRID, TAG_HEAD, TAG_SHAP,
+    TAG_CELL, TAG_DATA, TAG_GRID, TAG_HEAD, TAG_LEAF, TAG_SHAP,
 };
 use crate::index::Grid;
+use crate::leaves::LeafTable;
 use crate::shapes::ShapeTable;
 use roaring::RoaringBitmap;
 use sightline_core::Cell;
@@ -79,6 +80,8 @@ pub struct PvsFile {
     grid: Grid,
     /// The cells with their shapes, decoded once at open (`None`: every cell a box).
     shapes: Option<Vec<Cell>>,
+    /// Each stored cell's visible leaves (LEAF section), in stored order.
+    leaves: Option<Vec<Vec<u32>>>,
     data: Section,
     source: Source,
     cache: Mutex<Vec<(u32, Arc<Vec<u8>>)>>,
@@ -144,8 +147,17 @@ impl PvsFile {
             true => Some(from_postcard(&load(TAG_SHAP)?, "SHAP")?),
             false => None,
         };
+        let leaves: Option<LeafTable> = match sections.iter().any(|s| s.tag == TAG_LEAF) {
+            true => Some(from_postcard(&load(TAG_LEAF)?, "LEAF")?),
+            false => None,
+        };
         let data = find(TAG_DATA)?;
         table.validate(&header, data.len)?;
+        let stored = table
+            .present
+            .as_ref()
+            .map_or(header.cell_count as usize, Vec::len);
+        let leaves = leaves.map(|t| t.decode(stored)).transpose()?;
         grid.validate(header.cell_count as usize)?;
         if let Some(t) = &shapes {
             t.validate(header.cell_count as usize)?;
@@ -165,6 +177,7 @@ impl PvsFile {
             table,
             grid,
             shapes,
+            leaves,
             data,
             source,
             cache: Mutex::new(Vec::new()),
@@ -200,6 +213,19 @@ impl PvsFile {
             Some(p) => p.clone(),
             None => (0..self.cells.len() as u32).collect(),
         }
+    }
+
+    /// Whether the file stores each cell's visible leaves (a BSP level's build).
+    pub fn has_visible_leaves(&self) -> bool {
+        self.leaves.is_some()
+    }
+
+    /// The sorted visible leaves of stored cell `cell` (the numbers of the cells it
+    /// sees in its source, e.g. BSP leaves); `None` when the file has none or does not
+    /// store the cell.
+    pub fn visible_leaves(&self, cell: usize) -> Option<&[u32]> {
+        let rank = self.rank(cell)?;
+        self.leaves.as_ref()?.get(rank).map(Vec::as_slice)
     }
 
     /// Size of the set of a stored cell, without decoding it.

@@ -7,7 +7,7 @@
 //! the sets of its own cells only.
 
 use crate::error::PvsError;
-use crate::format::{encode_cells, EncodeOptions, Header};
+use crate::format::{encode_cells_with_leaves, EncodeOptions, Header};
 use crate::query::PvsFile;
 use roaring::RoaringBitmap;
 
@@ -56,16 +56,42 @@ pub fn merge(inputs: &[(String, PvsFile)]) -> Result<Vec<u8>, PvsError> {
     let sets: Vec<RoaringBitmap> = (0..n)
         .map(|c| inputs[owner[c].unwrap_or(0)].1.bitmap(c))
         .collect::<Result<_, _>>()?;
+    // Visible leaves are carried when every input has them.
+    let with_leaves = inputs
+        .iter()
+        .filter(|(_, f)| f.has_visible_leaves())
+        .count();
+    if with_leaves != 0 && with_leaves != inputs.len() {
+        return Err(PvsError::Merge(
+            "some inputs store visible leaves and others do not".into(),
+        ));
+    }
+    let leaves: Option<Vec<Vec<u32>>> = (with_leaves > 0)
+        .then(|| {
+            (0..n)
+                .map(|c| {
+                    inputs[owner[c].unwrap_or(0)]
+                        .1
+                        .visible_leaves(c)
+                        .map(<[u32]>::to_vec)
+                        .ok_or_else(|| {
+                            PvsError::Corrupt(format!("cell {c}: no visible leaves stored"))
+                        })
+                })
+                .collect::<Result<_, _>>()
+        })
+        .transpose()?;
     let header = Header {
         shard: None,
         ..h0.clone()
     };
     let present: Vec<u32> = (0..n as u32).collect();
-    encode_cells(
+    encode_cells_with_leaves(
         &header,
         &first.shaped_cells(),
         &present,
         &sets,
+        leaves.as_deref(),
         &EncodeOptions::default(),
     )
 }

@@ -1,12 +1,15 @@
 //! Cells beyond boxes in `.pvs` files: convex polyhedra (BSP leaves) and voxel cells
 //! round-trip with their shapes, point location decides by the shape and not by the
 //! bounding box, box-only files keep the version-1 bytes, and damaged shape sections
-//! give an error, never a panic.
+//! give an error, never a panic. The optional LEAF section (each cell's visible leaves)
+//! round-trips, survives a merge, and every bit flip or cut of it is an error.
 
 use roaring::RoaringBitmap;
 use sightline_core::{Cell, ConvexCell, HalfSpace, VoxelCell};
 use sightline_geom::{DVec3, ViewCell};
-use sightline_pvs::format::{encode_cells, encode_with, EncodeOptions, Header};
+use sightline_pvs::format::{
+    encode_cells, encode_cells_with_leaves, encode_with, EncodeOptions, Header,
+};
 use sightline_pvs::{PvsFile, FORMAT_VERSION, FORMAT_VERSION_BOXES};
 
 fn bx(a: [f64; 6]) -> ViewCell {
@@ -122,6 +125,94 @@ fn damaged_shape_files_error_without_panicking() {
                 let _ = f.locate(DVec3::new(0.5, 0.5, 0.5));
             }
         }
+    }
+    for len in 0..bytes.len() {
+        assert!(PvsFile::from_bytes(bytes[..len].to_vec()).is_err());
+    }
+}
+
+fn leaf_sets(n: usize) -> Vec<Vec<u32>> {
+    (0..n as u32)
+        .map(|i| (0..=i).map(|k| 3 * k + i).collect())
+        .collect()
+}
+
+fn encode_with_leaves(cells: &[Cell]) -> Vec<u8> {
+    let header = Header::new(42, "test", vec![], 100, cells.len());
+    let present: Vec<u32> = (0..cells.len() as u32).collect();
+    encode_cells_with_leaves(
+        &header,
+        cells,
+        &present,
+        &sets(cells.len()),
+        Some(&leaf_sets(cells.len())),
+        &EncodeOptions::default(),
+    )
+    .unwrap()
+}
+
+#[test]
+fn visible_leaves_round_trip_and_are_optional() {
+    let cells = cells();
+    let f = PvsFile::from_bytes(encode_with_leaves(&cells)).unwrap();
+    assert!(f.has_visible_leaves());
+    for (i, want) in leaf_sets(cells.len()).iter().enumerate() {
+        assert_eq!(f.visible_leaves(i), Some(want.as_slice()));
+    }
+    assert_eq!(f.visible_leaves(cells.len()), None);
+    f.verify().unwrap();
+    // Without leaves: the bytes of encode_cells, no LEAF section.
+    let plain = PvsFile::from_bytes(encode(&cells)).unwrap();
+    assert!(!plain.has_visible_leaves() && plain.visible_leaves(0).is_none());
+    // Boxes with leaves: version 2 (the LEAF section), still answering by box.
+    let boxes: Vec<Cell> = (0..3)
+        .map(|i| Cell::Box(bx([i as f64, 0.0, 0.0, i as f64 + 1.0, 1.0, 2.0])))
+        .collect();
+    let bytes = encode_with_leaves(&boxes);
+    assert_eq!(u16::from_le_bytes([bytes[8], bytes[9]]), FORMAT_VERSION);
+    let f = PvsFile::from_bytes(bytes).unwrap();
+    assert_eq!(f.locate(DVec3::new(1.5, 0.5, 1.0)), Some(1));
+    assert_eq!(f.visible_leaves(2), Some(&[2u32, 5, 8][..]));
+    // A merge keeps them.
+    let merged = sightline_pvs::merge(&[("a".into(), f)]).unwrap();
+    assert_eq!(merged, encode_with_leaves(&boxes));
+    // Unsorted sets and a wrong count are refused by the writer.
+    let header = Header::new(42, "test", vec![], 100, 3);
+    let bad = encode_cells_with_leaves(
+        &header,
+        &boxes,
+        &[0, 1, 2],
+        &sets(3),
+        Some(&[vec![1], vec![3, 2], vec![]]),
+        &EncodeOptions::default(),
+    );
+    assert!(bad.is_err());
+    let short = encode_cells_with_leaves(
+        &header,
+        &boxes,
+        &[0, 1, 2],
+        &sets(3),
+        Some(&[vec![1]]),
+        &EncodeOptions::default(),
+    );
+    assert!(short.is_err());
+}
+
+#[test]
+fn every_flip_or_cut_of_a_file_with_leaves_is_an_error() {
+    let bytes = encode_with_leaves(&cells());
+    for pos in 0..bytes.len() {
+        let mut b = bytes.clone();
+        b[pos] ^= 1 << (pos % 8);
+        let detected = match PvsFile::from_bytes(b) {
+            Err(_) => true,
+            Ok(f) => f.verify().is_err(),
+        };
+        assert!(
+            detected,
+            "flip at byte {pos} of {} not detected",
+            bytes.len()
+        );
     }
     for len in 0..bytes.len() {
         assert!(PvsFile::from_bytes(bytes[..len].to_vec()).is_err());

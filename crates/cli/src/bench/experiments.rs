@@ -1,6 +1,7 @@
 //! The experiments of the papers that the report reproduces, each a function that appends raw [`Record`]s and
 //! writes its section of the report.
 
+use super::indoor::IndoorRecord;
 use super::machine::Machine;
 use super::plots::{line_chart, Scale, Series};
 use super::report::{Report, Table};
@@ -64,6 +65,8 @@ pub struct Record {
 pub struct Bench {
     pub suite: Suite,
     pub records: Vec<Record>,
+    /// The indoor section's levels.
+    pub indoor: Vec<IndoorRecord>,
     pub notes: Vec<String>,
     truths: HashMap<(String, String), Vec<u32>>,
     quiet: bool,
@@ -98,6 +101,7 @@ impl Bench {
         Bench {
             suite,
             records: vec![],
+            indoor: vec![],
             notes: vec![],
             truths: HashMap::new(),
             quiet,
@@ -754,11 +758,29 @@ fn scaling(b: &mut Bench, names: &[String], rep: &mut Report, out: &Path) -> any
     Ok(())
 }
 
+/// Which parts of the suite run: the city experiments, and the indoor section on
+/// `levels` (`.bsp` files; none skips it).
+#[derive(Clone, Debug)]
+pub struct Sections {
+    pub cities: bool,
+    pub levels: Vec<PathBuf>,
+}
+
+impl Default for Sections {
+    fn default() -> Self {
+        Sections {
+            cities: true,
+            levels: Vec::new(),
+        }
+    }
+}
+
 /// Run a suite and write `out/README.md`, `out/raw.json` and the plots.
 pub fn run(
     suite: Suite,
     extra: &[PathBuf],
     methods: Option<Vec<String>>,
+    sections: &Sections,
     out: &Path,
     quiet: bool,
 ) -> anyhow::Result<()> {
@@ -795,19 +817,47 @@ pub fn run(
     let machine = Machine::detect();
     let mut rep = Report::new(&suite, &machine);
     type Experiment<'a> = Box<dyn FnOnce(&mut Bench, &mut Report) -> anyhow::Result<()> + 'a>;
-    let experiments: Vec<(&str, Experiment)> = vec![
-        ("Fig. 9", Box::new(|b, r| fig9(b, &scenes, r, out))),
-        (
+    let mut experiments: Vec<(&str, Experiment)> = Vec::new();
+    if sections.cities {
+        experiments.push(("Fig. 9", Box::new(|b, r| fig9(b, &scenes, r, out))));
+        experiments.push((
             "side by side",
             Box::new(|b, r| side_by_side(b, &scenes, &names, r)),
-        ),
-        ("Table 1", Box::new(|b, r| table1(b, r, out))),
-        (
+        ));
+        experiments.push(("Table 1", Box::new(|b, r| table1(b, r, out))));
+        experiments.push((
             "Fig. 12 + sweep",
             Box::new(|b, r| ext_proj(b, &scenes[0], r, out)),
-        ),
-        ("scaling", Box::new(|b, r| scaling(b, &names, r, out))),
-    ];
+        ));
+        experiments.push(("scaling", Box::new(|b, r| scaling(b, &names, r, out))));
+    }
+    // One experiment per level, so that raw.json is written after each (a long run that
+    // is stopped keeps its levels), then the section.
+    let level_names: Vec<String> = sections
+        .levels
+        .iter()
+        .map(|p| format!("indoor {}", p.display()))
+        .collect();
+    for (path, name) in sections.levels.iter().zip(&level_names) {
+        experiments.push((
+            name.as_str(),
+            Box::new(move |b, _| {
+                let (suite, quiet) = (b.suite.clone(), b.quiet);
+                super::indoor::measure_into(&suite, path, &mut b.indoor, &mut b.notes, quiet);
+                Ok(())
+            }),
+        ));
+    }
+    if !sections.levels.is_empty() {
+        experiments.push((
+            "indoor report",
+            Box::new(|b, r| super::indoor::write_section(&b.suite, &b.indoor, r, out)),
+        ));
+    }
+    anyhow::ensure!(
+        !experiments.is_empty(),
+        "nothing to run: --indoor-only needs a level (--levels LEVEL.bsp|FOLDER)"
+    );
     let total = experiments.len();
     let mut parts: Vec<(&str, f64)> = Vec::new();
     for (name, run) in experiments {
@@ -843,12 +893,14 @@ fn write_report(
         suite: &'a Suite,
         machine: &'a Machine,
         records: &'a [Record],
+        indoor: &'a [IndoorRecord],
         notes: &'a [String],
     }
     let raw = serde_json::to_vec_pretty(&Raw {
         suite,
         machine,
         records: &b.records,
+        indoor: &b.indoor,
         notes: &b.notes,
     })?;
     crate::common::write_atomic(&out.join("raw.json"), &raw)?;
@@ -881,10 +933,11 @@ mod tests {
             scaling_cells: 1,
             truth_samples: Some(8),
             truth_resolution_px: Some(64),
+            indoor_sources: 4,
         };
         let dir = std::env::temp_dir().join(format!("sightline-bench-{}", std::process::id()));
         let methods = vec!["dual-ray".to_string(), "dual-ray-exact".to_string()];
-        run(suite, &[], Some(methods), &dir, true).unwrap();
+        run(suite, &[], Some(methods), &Sections::default(), &dir, true).unwrap();
         let md = std::fs::read_to_string(dir.join("README.md")).unwrap();
         for section in [
             "Fig. 9",

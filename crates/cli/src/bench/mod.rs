@@ -7,10 +7,12 @@
 //! cell and shared by all methods.
 
 mod experiments;
+mod indoor;
 mod machine;
 mod plots;
 mod report;
 mod suite;
 
-pub use experiments::run;
+pub use experiments::{run, Sections};
+pub use indoor::find_levels;
 pub use suite::Suite;

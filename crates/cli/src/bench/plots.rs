@@ -31,6 +31,9 @@ fn tick(v: f64, scale: Scale) -> String {
             return String::new();
         }
     }
+    if v == 0.0 {
+        return "0".into();
+    }
     if v.abs() >= 10.0 || (v.fract() == 0.0 && v.abs() >= 1.0) {
         let n = v.round() as i64;
         let digits = n.unsigned_abs().to_string();
@@ -152,6 +155,71 @@ pub fn line_chart(
     Ok(())
 }
 
+/// Draw `series` as points into a 900×900 PNG with the same linear range on both axes
+/// (from 0) and the line y = x, for comparing a size with a reference's.
+pub fn scatter_chart(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+) -> anyhow::Result<()> {
+    let max = series
+        .iter()
+        .flat_map(|s| s.points.iter())
+        .filter(|p| p.0.is_finite() && p.1.is_finite())
+        .fold(f64::NAN, |m, p| m.max(p.0).max(p.1));
+    if max.is_nan() {
+        anyhow::bail!("chart '{title}' has no finite points");
+    }
+    let top = max.max(1.0) * 1.05;
+    let root = BitMapBackend::new(path, (900, 900)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 22))
+        .margin(14)
+        .x_label_area_size(44)
+        .y_label_area_size(64)
+        .build_cartesian_2d(0.0..top, 0.0..top)?;
+    let fmt = |v: &f64| tick(*v, Scale::Linear);
+    chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc(y_label)
+        .x_label_formatter(&fmt)
+        .y_label_formatter(&fmt)
+        .label_style(("sans-serif", 14))
+        .draw()?;
+    chart
+        .draw_series(LineSeries::new(
+            vec![(0.0, 0.0), (top, top)],
+            BLACK.stroke_width(1),
+        ))?
+        .label("y = x")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.stroke_width(1)));
+    for (i, s) in series.iter().enumerate() {
+        let color = Palette99::pick(i).to_rgba();
+        chart
+            .draw_series(
+                s.points
+                    .iter()
+                    .filter(|p| p.0.is_finite() && p.1.is_finite())
+                    .map(|p| Circle::new(*p, 2, color.mix(0.6).filled())),
+            )?
+            .label(s.name.clone())
+            .legend(move |(x, y)| Circle::new((x + 9, y), 4, color.filled()));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 14))
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()?;
+    root.present()?;
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -167,6 +235,7 @@ mod tests {
         assert_eq!(tick(2.5, Scale::Linear), "2.50");
         assert_eq!(tick(150_000.0, Scale::Linear), "150 000");
         assert_eq!(tick(-12.0, Scale::Linear), "-12");
+        assert_eq!(tick(0.0, Scale::Linear), "0");
     }
 
     #[test]
@@ -191,6 +260,15 @@ mod tests {
         let img = image::open(&path).unwrap();
         assert_eq!((img.width(), img.height()), (900, 560));
         assert!(line_chart(&path, "t", "x", "y", &[], Scale::Log, Scale::Log).is_err());
+        let scatter = dir.join("scatter.png");
+        let pts = vec![Series {
+            name: "dm1".into(),
+            points: vec![(10.0, 9.0), (120.0, 130.0)],
+        }];
+        scatter_chart(&scatter, "t", "vis", "ours", &pts).unwrap();
+        let img = image::open(&scatter).unwrap();
+        assert_eq!((img.width(), img.height()), (900, 900));
+        assert!(scatter_chart(&scatter, "t", "x", "y", &[]).is_err());
         if std::env::var_os("SIGHTLINE_KEEP_PLOT").is_none() {
             std::fs::remove_dir_all(&dir).ok();
         }

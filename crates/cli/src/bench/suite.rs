@@ -29,6 +29,8 @@ pub struct Suite {
     pub scaling_cells: usize,
     pub truth_samples: Option<u32>,
     pub truth_resolution_px: Option<u32>,
+    /// Source leaves per level checked against the ray oracle (indoor section).
+    pub indoor_sources: usize,
 }
 
 impl Suite {
@@ -51,6 +53,7 @@ impl Suite {
                 scaling_cells: 2,
                 truth_samples: None,
                 truth_resolution_px: None,
+                indoor_sources: 20,
             }),
             "full" => Ok(Suite {
                 name: "full".into(),
@@ -69,6 +72,7 @@ impl Suite {
                 scaling_cells: 4,
                 truth_samples: None,
                 truth_resolution_px: None,
+                indoor_sources: 60,
             }),
             other => anyhow::bail!("unknown suite '{other}' (known: quick, full)"),
         }

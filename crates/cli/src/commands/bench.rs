@@ -1,13 +1,19 @@
 //! `sightline bench`: see [`crate::bench`].
 
-use crate::bench::{run as run_bench, Suite};
+use crate::bench::{find_levels, run as run_bench, Sections, Suite};
 use crate::cli::Command;
+use std::path::PathBuf;
+
+/// The indoor section's levels when `--levels` is not given.
+const DEFAULT_LEVELS: &str = "data/quake";
 
 pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
     let Command::Bench {
         suite,
         scene,
         methods,
+        levels,
+        indoor_only,
         out,
     } = cmd
     else {
@@ -20,7 +26,21 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
             .filter(|s| !s.is_empty())
             .collect()
     });
-    run_bench(suite, &scene, methods, &out, quiet)?;
+    let levels = if levels.is_empty() {
+        let default = PathBuf::from(DEFAULT_LEVELS);
+        if default.is_dir() {
+            find_levels(&[default])?
+        } else {
+            Vec::new()
+        }
+    } else {
+        find_levels(&levels)?
+    };
+    let sections = Sections {
+        cities: !indoor_only,
+        levels,
+    };
+    run_bench(suite, &scene, methods, &sections, &out, quiet)?;
     if !quiet {
         eprintln!("report written to {}", out.join("README.md").display());
     }

@@ -155,7 +155,8 @@ pub fn info(path: &Path) -> anyhow::Result<BspInfo> {
 }
 
 /// `build LEVEL.bsp --method portals|portals-fast -o L.pvs`: the face PVS of every open
-/// leaf, each leaf stored as its convex cell (`query --at` locates by the leaf's shape).
+/// leaf and its visible leaves (the LEAF section), each leaf stored as its convex cell
+/// (`query --at` locates by the leaf's shape and answers as `pvs --at`).
 pub fn build(path: &Path, mode: Mode, out: &Path, quiet: bool) -> anyhow::Result<()> {
     let level = level(path)?;
     let scene = level.to_scene();
@@ -168,14 +169,18 @@ pub fn build(path: &Path, mode: Mode, out: &Path, quiet: bool) -> anyhow::Result
     let cells = sightline_portals::leaf_cells(&level);
     anyhow::ensure!(!cells.is_empty(), "{} has no open leaf", path.display());
     let all = portals.solve_all(mode);
+    let pvs_of = |c: &sightline_core::Cell| all.get(c.id().unwrap_or(0) as usize);
     let sets: Vec<roaring::RoaringBitmap> = cells
         .iter()
         .map(|c| {
-            let leaf = c.id().unwrap_or(0) as usize;
-            all.get(leaf)
+            pvs_of(c)
                 .map(|p| p.faces.iter().copied().collect())
                 .unwrap_or_default()
         })
+        .collect();
+    let leaves: Vec<Vec<u32>> = cells
+        .iter()
+        .map(|c| pvs_of(c).map(|p| p.leaves.clone()).unwrap_or_default())
         .collect();
     let header = sightline_pvs::Header::new(
         scene.fingerprint(),
@@ -185,11 +190,12 @@ pub fn build(path: &Path, mode: Mode, out: &Path, quiet: bool) -> anyhow::Result
         cells.len(),
     );
     let present: Vec<u32> = (0..cells.len() as u32).collect();
-    let bytes = sightline_pvs::format::encode_cells(
+    let bytes = sightline_pvs::format::encode_cells_with_leaves(
         &header,
         &cells,
         &present,
         &sets,
+        Some(&leaves),
         &sightline_pvs::format::EncodeOptions::default(),
     )?;
     sightline_pvs::build::write_atomic(out, &bytes)

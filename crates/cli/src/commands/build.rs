@@ -155,6 +155,9 @@ struct QueryReport {
     index: usize,
     method: String,
     visible: Vec<u32>,
+    /// The leaves the cell sees, when the file stores them (a BSP level's build).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    visible_leaves: Option<Vec<u32>>,
 }
 
 fn run_query(path: &Path, at: [f64; 3], json: bool) -> anyhow::Result<()> {
@@ -178,6 +181,7 @@ fn run_query(path: &Path, at: [f64; 3], json: bool) -> anyhow::Result<()> {
         index,
         method: file.header().method.clone(),
         visible,
+        visible_leaves: file.visible_leaves(index).map(<[u32]>::to_vec),
     };
     if json {
         print_json(&report)
@@ -186,8 +190,12 @@ fn run_query(path: &Path, at: [f64; 3], json: bool) -> anyhow::Result<()> {
         if let Some(l) = report.leaf {
             print!("leaf {l}, ");
         }
+        let leaves = report
+            .visible_leaves
+            .as_ref()
+            .map_or(String::new(), |l| format!(", {} leaves", l.len()));
         println!(
-            "cell {index} [{}, {}, {}, {}, {}, {}] ({}): {} of {} objects visible",
+            "cell {index} [{}, {}, {}, {}, {}, {}] ({}): {} of {} objects visible{leaves}",
             c[0],
             c[1],
             c[2],

@@ -59,6 +59,7 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
     let Command::Map {
         scene,
         cell,
+        at,
         method,
         pvs,
         out,
@@ -66,7 +67,25 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
     else {
         bail!("internal: `map` called with another command");
     };
-    let _ = quiet;
+    if super::bsp::is_bsp(&scene.scene) {
+        let name = method.as_deref().unwrap_or("portals");
+        let Some(mode) = super::bsp::portal_mode(&scene.scene, name)? else {
+            bail!("map of a BSP level takes --method portals or portals-fast, not {name}");
+        };
+        let Some(at) = at else {
+            bail!("map of a BSP level takes --at X,Y,Z (the leaf holding the point)");
+        };
+        if let Some(file) = pvs {
+            bail!(
+                "map of a BSP level computes the PVS; --pvs {} is not read",
+                file.display()
+            );
+        }
+        return super::bsp_map::run(&scene.scene, mode, at, &out, quiet);
+    }
+    let Some(cell) = cell else {
+        bail!("--at X,Y,Z belongs to BSP levels (.bsp); give --cell X0,Y0,Z0,X1,Y1,Z1");
+    };
     if let Some(file) = pvs {
         bail!(
             "reading a .pvs file ({}) is not supported by this build yet; use --method NAME",

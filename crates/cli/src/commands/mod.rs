@@ -3,6 +3,7 @@
 
 mod bench;
 mod bsp;
+mod bsp_map;
 mod build;
 mod cells;
 mod check;
