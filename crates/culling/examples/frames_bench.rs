@@ -13,12 +13,11 @@
 //!   answer of a wider frustum from the same eye), how much the second level removes.
 
 use glam::DVec3;
-use sightline_culling::frustum::{box_in_view, clip_project, BoxInView};
-use sightline_culling::hzb::draw_occluders;
+use sightline_culling::masked::RasterPath;
+use sightline_culling::measure::{full_res, full_res_occluded, masked_throughput, Throughput};
 use sightline_culling::truth::FrameTruth;
 use sightline_culling::walk::street_walk;
 use sightline_culling::{method, CullScene, Frustum};
-use sightline_raster::{Framebuffer, ScreenVertex};
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
@@ -37,31 +36,6 @@ fn p90(v: &mut [f64]) -> f64 {
     }
     v.sort_by(|a, b| a.total_cmp(b));
     v[(v.len() * 9 / 10).min(v.len() - 1)]
-}
-
-/// Full-resolution reference: every in-frustum prism's front faces drawn as one inner
-/// union into a per-pixel depth buffer, then the max-depth pyramid.
-fn full_res(cs: &CullScene, f: &Frustum) -> (Framebuffer, u64) {
-    let view = f.view();
-    let mut fb = Framebuffer::for_view(view);
-    let mut tris = 0;
-    let mut scratch = Vec::new();
-    let mut pieces: Vec<Vec<ScreenVertex>> = Vec::new();
-    for o in &cs.occluders {
-        if box_in_view(view, o.lo, o.hi) == BoxInView::Outside {
-            continue;
-        }
-        pieces.clear();
-        for face in o.front_faces(f.eye) {
-            tris += face.tris as u64;
-            if clip_project(view, &face.verts, &mut scratch) {
-                pieces.push(scratch.clone());
-            }
-        }
-        let refs: Vec<&[ScreenVertex]> = pieces.iter().map(|p| p.as_slice()).collect();
-        fb.draw_screen_union(&refs, o.object);
-    }
-    (fb, tris)
 }
 
 fn main() {
@@ -123,8 +97,11 @@ fn main() {
         let mut occl = vec![0usize; names.len()];
         let mut false_culls = vec![0usize; names.len()];
         let mut truth_frames = 0usize;
-        let (mut masked_tris, mut masked_s) = (0u64, 0.0f64);
-        let (mut full_tris, mut full_s) = (0u64, 0.0f64);
+        let mut scalar_rates = Vec::new();
+        let mut simd_rates = Vec::new();
+        let mut full_rates = Vec::new();
+        let (mut scalar_th, mut simd_th, mut full_th) =
+            (Throughput::default(), Throughput::default(), Throughput::default());
         let (mut full_occl, mut hzb_occl_same) = (0usize, 0usize);
         let (mut two_cand, mut two_vis) = (0usize, 0usize);
         let mut total = 0usize;
@@ -153,24 +130,21 @@ fn main() {
             }
             // Rasterizer throughput: every front face in the frustum (no skipping of
             // hidden prisms), the same faces the full-resolution reference draws.
-            let t0 = Instant::now();
-            let (_buf, tris) = draw_occluders(&cs, &f, None, false);
-            masked_s += t0.elapsed().as_secs_f64();
-            masked_tris += tris;
+            for (path, th, rates) in [
+                (RasterPath::Scalar, &mut scalar_th, &mut scalar_rates),
+                (RasterPath::Simd, &mut simd_th, &mut simd_rates),
+            ] {
+                let t = masked_throughput(&cs, &f, path);
+                th.tris += t.tris;
+                th.seconds += t.seconds;
+                rates.push(t.tris_per_s());
+            }
             if k % full_every == 0 {
-                let t0 = Instant::now();
-                let (fb, tris) = full_res(&cs, &f);
-                full_s += t0.elapsed().as_secs_f64();
-                full_tris += tris;
-                let pyr = fb.pyramid();
-                for (lo, hi) in &cs.boxes {
-                    if let Some(([i0, j0, i1, j1], z_near)) = box_in_view(f.view(), *lo, *hi).rect()
-                    {
-                        if pyr.rect_occluded(i0, j0, i1, j1, z_near) {
-                            full_occl += 1;
-                        }
-                    }
-                }
+                let (fb, t) = full_res(&cs, &f);
+                full_th.tris += t.tris;
+                full_th.seconds += t.seconds;
+                full_rates.push(t.tris_per_s());
+                full_occl += full_res_occluded(&cs, &f, &fb);
                 hzb_occl_same += answers[0].occlusion_culled;
             }
             if k % truth_every == 0 {
@@ -200,14 +174,17 @@ fn main() {
             walk.len()
         );
         println!(
-            "occluder tris/s (one core): masked tiles {:.2} M ({} tris in {:.2} s); sightline-raster full-res union {:.3} M ({} tris in {:.2} s)",
-            masked_tris as f64 / masked_s / 1e6, masked_tris, masked_s,
-            full_tris as f64 / full_s.max(1e-9) / 1e6, full_tris, full_s
+            "occluder tris/s (one core, median of frames / total): masked scalar {:.2} / {:.2} M; masked {} {:.2} / {:.2} M; sightline-raster full-res union {:.2} / {:.2} M ({} tris in {:.2} s masked, {:.2} s scalar)",
+            median(&mut scalar_rates) / 1e6, scalar_th.tris_per_s() / 1e6,
+            RasterPath::Simd.describe(),
+            median(&mut simd_rates) / 1e6, simd_th.tris_per_s() / 1e6,
+            median(&mut full_rates) / 1e6, full_th.tris_per_s() / 1e6,
+            simd_th.tris, simd_th.seconds, scalar_th.seconds
         );
         println!(
             "hzb draws {:.0} occluder tris per frame (prisms already hidden are skipped) of {:.0} front-facing in the frustum",
             hzb_tris as f64 / walk.len().max(1) as f64,
-            masked_tris as f64 / walk.len().max(1) as f64
+            simd_th.tris as f64 / walk.len().max(1) as f64
         );
         println!(
             "occlusion-culled on the full-res frames: hzb {} vs full-res depth buffer {} ({:.1} %)",

@@ -13,7 +13,7 @@
 //! step only over-estimates what is visible; ties are visible). Knobs: the frame size.
 
 use crate::frustum::{box_in_view, clip_project, BoxInView, Frustum};
-use crate::masked::MaskedBuffer;
+use crate::masked::{MaskedBuffer, RasterPath};
 use crate::scene::CullScene;
 use crate::{Culler, Frame};
 use std::sync::Arc;
@@ -32,15 +32,17 @@ impl Hzb {
 
 /// Draw the occluders of `scene` (only those of `allowed` objects when given) into a
 /// masked buffer for `frustum`; returns the buffer and the triangles drawn. With
-/// `skip_hidden`, a prism whose box the buffer already hides is not drawn.
+/// `skip_hidden`, a prism whose box the buffer already hides is not drawn. `path` picks
+/// the rasterizer's scalar or SIMD code (same buffer either way).
 pub fn draw_occluders(
     scene: &CullScene,
     frustum: &Frustum,
     allowed: Option<&[bool]>,
     skip_hidden: bool,
+    path: RasterPath,
 ) -> (MaskedBuffer, u64) {
     let view = frustum.view();
-    let mut buf = MaskedBuffer::new(view.width_px, view.height_px);
+    let mut buf = MaskedBuffer::with_path(view.width_px, view.height_px, path);
     let mut order: Vec<(f64, u32, BoxInView)> = Vec::new();
     for (k, o) in scene.occluders.iter().enumerate() {
         if allowed.is_some_and(|a| !a[o.object as usize]) {
@@ -85,7 +87,13 @@ impl Culler for Hzb {
 
     fn cull(&self, frustum: &Frustum, candidates: Option<&[u32]>) -> Frame {
         let allowed = candidates.map(|c| crate::mask_of(c, self.scene.objects()));
-        let (mut buf, tris) = draw_occluders(&self.scene, frustum, allowed.as_deref(), true);
+        let (mut buf, tris) = draw_occluders(
+            &self.scene,
+            frustum,
+            allowed.as_deref(),
+            true,
+            RasterPath::DEFAULT,
+        );
         buf.build_hierarchy();
         let mut frame = Frame::new(self.scene.objects(), candidates);
         frame.occluder_tris = tris;

@@ -65,6 +65,7 @@ pub struct Bench {
     pub suite: Suite,
     pub records: Vec<Record>,
     pub notes: Vec<String>,
+    pub from_point: Vec<super::from_point::FromPointRecord>,
     truths: HashMap<(String, String), Vec<u32>>,
     quiet: bool,
 }
@@ -99,12 +100,13 @@ impl Bench {
             suite,
             records: vec![],
             notes: vec![],
+            from_point: vec![],
             truths: HashMap::new(),
             quiet,
         }
     }
 
-    fn log(&self, msg: &str) {
+    pub(crate) fn log(&self, msg: &str) {
         if !self.quiet {
             eprintln!("bench: {msg}");
         }
@@ -807,6 +809,10 @@ pub fn run(
             Box::new(|b, r| ext_proj(b, &scenes[0], r, out)),
         ),
         ("scaling", Box::new(|b, r| scaling(b, &names, r, out))),
+        (
+            "from-point",
+            Box::new(|b, r| super::from_point::from_point(b, &scenes, r, out)),
+        ),
     ];
     let total = experiments.len();
     let mut parts: Vec<(&str, f64)> = Vec::new();
@@ -843,12 +849,14 @@ fn write_report(
         suite: &'a Suite,
         machine: &'a Machine,
         records: &'a [Record],
+        from_point: &'a [super::from_point::FromPointRecord],
         notes: &'a [String],
     }
     let raw = serde_json::to_vec_pretty(&Raw {
         suite,
         machine,
         records: &b.records,
+        from_point: &b.from_point,
         notes: &b.notes,
     })?;
     crate::common::write_atomic(&out.join("raw.json"), &raw)?;
@@ -881,6 +889,12 @@ mod tests {
             scaling_cells: 1,
             truth_samples: Some(8),
             truth_resolution_px: Some(64),
+            from_point_frames: 3,
+            from_point_size: (160, 90),
+            from_point_full_every: 1,
+            from_point_truth_every: 1,
+            from_point_walk_frames: 3,
+            from_point_scenes: vec![],
         };
         let dir = std::env::temp_dir().join(format!("sightline-bench-{}", std::process::id()));
         let methods = vec!["dual-ray".to_string(), "dual-ray-exact".to_string()];
@@ -892,14 +906,22 @@ mod tests {
             "Table 1",
             "Fig. 12",
             "Scaling",
+            "From-point culling",
         ] {
             assert!(md.contains(section), "missing section {section}:\n{md}");
         }
         assert!(md.contains("Suite ran in"), "{md}");
         assert!(dir.join("table1-time.png").exists());
+        assert!(dir.join("walk-visible.png").exists(), "{md}");
         let raw: serde_json::Value =
             serde_json::from_slice(&std::fs::read(dir.join("raw.json")).unwrap()).unwrap();
         let records = raw["records"].as_array().unwrap();
+        for r in raw["from_point"].as_array().unwrap() {
+            for c in r["cullers"].as_array().unwrap() {
+                assert_eq!(c["false_culls"].as_u64(), Some(0), "{r}");
+            }
+        }
+
         assert!(!records.is_empty());
         for r in records {
             if let Some(m) = r["missed"].as_u64() {

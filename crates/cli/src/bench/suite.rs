@@ -29,6 +29,16 @@ pub struct Suite {
     pub scaling_cells: usize,
     pub truth_samples: Option<u32>,
     pub truth_resolution_px: Option<u32>,
+    /// From-point section: frames per scene, buffer size, every how many frames the
+    /// full-resolution reference and the item-buffer truth run, frames of the walk plot.
+    pub from_point_frames: usize,
+    pub from_point_size: (u32, u32),
+    pub from_point_full_every: usize,
+    pub from_point_truth_every: usize,
+    pub from_point_walk_frames: usize,
+    /// Scene files the from-point section adds when present and not given with
+    /// `--scene` (relative to the working directory: the repository's `data/`).
+    pub from_point_scenes: Vec<String>,
 }
 
 impl Suite {
@@ -51,6 +61,12 @@ impl Suite {
                 scaling_cells: 2,
                 truth_samples: None,
                 truth_resolution_px: None,
+                from_point_frames: 40,
+                from_point_size: (1920, 1080),
+                from_point_full_every: 4,
+                from_point_truth_every: 4,
+                from_point_walk_frames: 60,
+                from_point_scenes: vec!["data/lyon1_bdtopo.geojson".into()],
             }),
             "full" => Ok(Suite {
                 name: "full".into(),
@@ -69,6 +85,12 @@ impl Suite {
                 scaling_cells: 4,
                 truth_samples: None,
                 truth_resolution_px: None,
+                from_point_frames: 300,
+                from_point_size: (1920, 1080),
+                from_point_full_every: 5,
+                from_point_truth_every: 10,
+                from_point_walk_frames: 200,
+                from_point_scenes: vec!["data/lyon1_bdtopo.geojson".into()],
             }),
             other => anyhow::bail!("unknown suite '{other}' (known: quick, full)"),
         }
