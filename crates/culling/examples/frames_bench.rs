@@ -44,6 +44,8 @@ fn main() {
     let mut truth_every = 50usize;
     let mut full_every = 10usize;
     let mut scenes: Vec<PathBuf> = Vec::new();
+    // Only the occluder rasterization (scalar, SIMD), for profiling.
+    let mut raster_only = false;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
@@ -65,6 +67,7 @@ fn main() {
                     .and_then(|v| v.parse().ok())
                     .expect("--full-every K")
             }
+            "--raster-only" => raster_only = true,
             "--size" => {
                 let s = args.next().expect("--size WxH");
                 let (a, b) = s.split_once('x').expect("--size WxH");
@@ -117,7 +120,7 @@ fn main() {
             .unwrap();
             total += cs.objects();
             let mut answers = Vec::new();
-            for (m, c) in cullers.iter().enumerate() {
+            for (m, c) in cullers.iter().enumerate().filter(|_| !raster_only) {
                 let t0 = Instant::now();
                 let fr = c.cull(&f, None);
                 ms[m].push(t0.elapsed().as_secs_f64() * 1e3);
@@ -138,6 +141,9 @@ fn main() {
                 th.tris += t.tris;
                 th.seconds += t.seconds;
                 rates.push(t.tris_per_s());
+            }
+            if raster_only {
+                continue;
             }
             if k % full_every == 0 {
                 let (fb, t) = full_res(&cs, &f);

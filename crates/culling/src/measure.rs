@@ -4,9 +4,9 @@
 //! full-resolution depth buffer of the same occluders culls (the reference of Masked
 //! Occlusion Culling's "culled %", Hasselgren et al. 2016, §5).
 
-use crate::frustum::{box_in_view, clip_project, BoxInView, Frustum};
-use crate::hzb::draw_occluders;
-use crate::masked::RasterPath;
+use crate::frustum::{box_in_view, clip_project, Frustum};
+use crate::hzb::{draw_ordered, occluder_order};
+use crate::masked::{MaskedBuffer, RasterPath};
 use crate::scene::CullScene;
 use sightline_raster::{Framebuffer, ScreenVertex};
 use std::time::Instant;
@@ -30,10 +30,16 @@ impl Throughput {
 }
 
 /// Draw every front face of every occluder in the frustum (no skipping of hidden
-/// prisms: the same faces [`full_res`] draws) into the masked buffer by `path`, timed.
+/// prisms: the same faces [`full_res`] draws) into the masked buffer by `path`. Timed:
+/// projection, near clipping and rasterization of the faces (what Masked Occlusion
+/// Culling's triangle rates cover); not the frustum test and ordering of the prisms nor
+/// the buffer's allocation, which [`full_res`] does not time either.
 pub fn masked_throughput(cs: &CullScene, f: &Frustum, path: RasterPath) -> Throughput {
+    let view = f.view();
+    let order = occluder_order(cs, f, None);
+    let mut buf = MaskedBuffer::with_path(view.width_px, view.height_px, path);
     let t0 = Instant::now();
-    let (_buf, tris) = draw_occluders(cs, f, None, false, path);
+    let tris = draw_ordered(&mut buf, cs, f, &order, false);
     Throughput {
         tris,
         seconds: t0.elapsed().as_secs_f64(),
@@ -41,18 +47,18 @@ pub fn masked_throughput(cs: &CullScene, f: &Frustum, path: RasterPath) -> Throu
 }
 
 /// The full-resolution reference: every in-frustum prism's front faces drawn as one
-/// inner union into a per-pixel depth buffer (`sightline-raster`), timed.
+/// inner union into a per-pixel depth buffer (`sightline-raster`), nearest first, timed
+/// as [`masked_throughput`] is.
 pub fn full_res(cs: &CullScene, f: &Frustum) -> (Framebuffer, Throughput) {
-    let t0 = Instant::now();
     let view = f.view();
     let mut fb = Framebuffer::for_view(view);
+    let order = occluder_order(cs, f, None);
+    let t0 = Instant::now();
     let mut tris = 0;
     let mut scratch = Vec::new();
     let mut pieces: Vec<Vec<ScreenVertex>> = Vec::new();
-    for o in &cs.occluders {
-        if box_in_view(view, o.lo, o.hi) == BoxInView::Outside {
-            continue;
-        }
+    for &(k, _) in &order {
+        let o = &cs.occluders[k as usize];
         pieces.clear();
         for face in o.front_faces(f.eye) {
             tris += face.tris as u64;

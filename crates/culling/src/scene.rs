@@ -4,13 +4,16 @@
 
 use glam::DVec3;
 use sightline_raster::prism_faces;
-use sightline_scene::{occluders::inner_prisms, Scene};
+use sightline_scene::{occluders::inner_prisms, Geometry, Mesh, Scene};
 
 /// One planar convex face of an occluder prism, outward normal.
 #[derive(Clone, Debug)]
 pub struct OccluderFace {
     pub verts: Vec<DVec3>,
     pub normal: DVec3,
+    /// `normal · verts[0]`: the face is front-facing from `eye` when `normal · eye` is
+    /// greater (tested without reaching into `verts`).
+    pub offset: f64,
     /// Triangles it stands for (a wall quad is 2), for throughput figures.
     pub tris: u32,
 }
@@ -30,14 +33,18 @@ impl OccluderPrism {
     pub fn front_faces(&self, eye: DVec3) -> impl Iterator<Item = &OccluderFace> {
         self.faces
             .iter()
-            .filter(move |f| (eye - f.verts[0]).dot(f.normal) > 0.0)
+            .filter(move |f| eye.dot(f.normal) > f.offset)
     }
 }
 
 /// A scene prepared for from-point culling.
 #[derive(Clone, Debug)]
 pub struct CullScene {
+    /// Closed prisms (front faces drawn) and, with [`CullScene::with_surfaces`], opaque
+    /// surfaces (one polygon each, both orientations).
     pub occluders: Vec<OccluderPrism>,
+    /// How many of `occluders` are mesh surfaces.
+    pub surface_occluders: usize,
     /// Outer bounding box of each object (`lo`, `hi`), by id.
     pub boxes: Vec<(DVec3, DVec3)>,
 }
@@ -58,6 +65,7 @@ impl CullScene {
                 }
                 let tris = verts.len() as u32 - 2;
                 faces.push(OccluderFace {
+                    offset: normal.dot(verts[0]),
                     verts,
                     normal,
                     tris,
@@ -76,7 +84,66 @@ impl CullScene {
             .iter()
             .map(|o| (o.bounds.min, o.bounds.max))
             .collect();
-        CullScene { occluders, boxes }
+        CullScene {
+            occluders,
+            surface_occluders: 0,
+            boxes,
+        }
+    }
+
+    /// [`CullScene::new`] plus the surfaces of the mesh objects as occluders: each
+    /// triangle — or each convex planar polygon a mesh is a fan of, as a BSP level's
+    /// faces are — occludes what lies entirely behind it, drawn from whichever side the
+    /// eye is on. Conservative where the surfaces are opaque: a Quake level's world
+    /// faces bound its solid and sky, which SPEC §11 makes opaque (a face named `*…`, a
+    /// liquid surface, is see-through and left out); a mesh scene's triangles are opaque
+    /// to the renderer and to the item-buffer truth. It is *not* the 2.5D inner bound
+    /// of SPEC §1, under which an open mesh hides nothing.
+    pub fn with_surfaces(scene: &Scene) -> CullScene {
+        let mut cs = CullScene::new(scene);
+        for (id, o) in scene.objects.iter().enumerate() {
+            let Geometry::Mesh(mesh) = &o.geometry else {
+                continue;
+            };
+            if o.name.as_deref().is_some_and(|n| n.starts_with('*')) {
+                continue;
+            }
+            for verts in surface_polygons(mesh) {
+                let normal = newell(&verts);
+                if !(normal.length() > 1e-12) {
+                    continue;
+                }
+                let (mut lo, mut hi) = (verts[0], verts[0]);
+                for v in &verts {
+                    lo = lo.min(*v);
+                    hi = hi.max(*v);
+                }
+                let tris = verts.len() as u32 - 2;
+                let back: Vec<DVec3> = verts.iter().rev().copied().collect();
+                let faces = vec![
+                    OccluderFace {
+                        offset: normal.dot(verts[0]),
+                        verts,
+                        normal,
+                        tris,
+                    },
+                    OccluderFace {
+                        offset: -normal.dot(back[0]),
+                        verts: back,
+                        normal: -normal,
+                        tris,
+                    },
+                ];
+                cs.occluders.push(OccluderPrism {
+                    object: id as u32,
+                    lo,
+                    hi,
+                    faces,
+                });
+                cs.surface_occluders += 1;
+            }
+        }
+        cs
     }
 
     /// Number of objects (occludees).
@@ -97,4 +164,45 @@ fn newell(v: &[DVec3]) -> DVec3 {
         );
     }
     n
+}
+
+/// The mesh as convex planar polygons: the whole vertex ring when the triangles are the
+/// fan `[0, k, k + 1]` over it and the ring is planar and convex (a BSP face), else one
+/// polygon per triangle.
+fn surface_polygons(mesh: &Mesh) -> Vec<Vec<DVec3>> {
+    let v = &mesh.vertices;
+    let fan = v.len() >= 3
+        && mesh.triangles.len() == v.len() - 2
+        && mesh
+            .triangles
+            .iter()
+            .enumerate()
+            .all(|(k, t)| *t == [0, k as u32 + 1, k as u32 + 2]);
+    if fan && is_planar_convex(v) {
+        return vec![v.clone()];
+    }
+    mesh.triangles
+        .iter()
+        .filter(|t| t.iter().all(|&i| (i as usize) < v.len()))
+        .map(|t| t.iter().map(|&i| v[i as usize]).collect())
+        .collect()
+}
+
+/// Whether the ring `v` is planar (within 1e-6 of its size) and strictly convex.
+fn is_planar_convex(v: &[DVec3]) -> bool {
+    let n = newell(v);
+    let len = n.length();
+    if !(len > 0.0) {
+        return false;
+    }
+    let n = n / len;
+    let d = n.dot(v[0]);
+    let size = v.iter().map(|p| (*p - v[0]).length()).fold(0.0, f64::max);
+    if v.iter().any(|p| (n.dot(*p) - d).abs() > 1e-6 * size.max(1.0)) {
+        return false;
+    }
+    (0..v.len()).all(|k| {
+        let (a, b, c) = (v[k], v[(k + 1) % v.len()], v[(k + 2) % v.len()]);
+        (b - a).cross(c - b).dot(n) >= 0.0
+    })
 }
