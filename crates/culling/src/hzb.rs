@@ -74,9 +74,9 @@ pub fn draw_ordered(
                 continue;
             }
         }
-        for f in scene.occluders[k as usize].front_faces(frustum.eye) {
+        for (f, verts) in scene.front_faces(&scene.occluders[k as usize], frustum.eye) {
             tris += f.tris as u64;
-            if clip_project(view, &f.verts, &mut scratch) {
+            if clip_project(view, verts, &mut scratch) {
                 buf.draw_polygon(&scratch);
             }
         }

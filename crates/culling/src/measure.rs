@@ -60,9 +60,9 @@ pub fn full_res(cs: &CullScene, f: &Frustum) -> (Framebuffer, Throughput) {
     for &(k, _) in &order {
         let o = &cs.occluders[k as usize];
         pieces.clear();
-        for face in o.front_faces(f.eye) {
+        for (face, verts) in cs.front_faces(o, f.eye) {
             tris += face.tris as u64;
-            if clip_project(view, &face.verts, &mut scratch) {
+            if clip_project(view, verts, &mut scratch) {
                 pieces.push(scratch.clone());
             }
         }

@@ -6,10 +6,12 @@ use glam::DVec3;
 use sightline_raster::prism_faces;
 use sightline_scene::{occluders::inner_prisms, Geometry, Mesh, Scene};
 
-/// One planar convex face of an occluder prism, outward normal.
+/// One planar convex face of an occluder prism, outward normal; its vertices are
+/// `CullScene::verts[first_vert .. first_vert + vert_count]`.
 #[derive(Clone, Debug)]
 pub struct OccluderFace {
-    pub verts: Vec<DVec3>,
+    pub first_vert: u32,
+    pub vert_count: u32,
     pub normal: DVec3,
     /// `normal · verts[0]`: the face is front-facing from `eye` when `normal · eye` is
     /// greater (tested without reaching into `verts`).
@@ -18,23 +20,15 @@ pub struct OccluderFace {
     pub tris: u32,
 }
 
-/// An occluder: one inner prism of an object, as its faces.
+/// An occluder: one inner prism of an object, as its faces
+/// `CullScene::faces[first_face .. first_face + face_count]`.
 #[derive(Clone, Debug)]
 pub struct OccluderPrism {
     pub object: u32,
     pub lo: DVec3,
     pub hi: DVec3,
-    pub faces: Vec<OccluderFace>,
-}
-
-impl OccluderPrism {
-    /// Faces facing the eye (the back faces of a closed prism lie behind its front
-    /// faces in every direction, so they hide nothing more).
-    pub fn front_faces(&self, eye: DVec3) -> impl Iterator<Item = &OccluderFace> {
-        self.faces
-            .iter()
-            .filter(move |f| eye.dot(f.normal) > f.offset)
-    }
+    pub first_face: u32,
+    pub face_count: u32,
 }
 
 /// A scene prepared for from-point culling.
@@ -45,6 +39,10 @@ pub struct CullScene {
     pub occluders: Vec<OccluderPrism>,
     /// How many of `occluders` are mesh surfaces.
     pub surface_occluders: usize,
+    /// The occluders' faces, prism after prism, and their vertices, face after face: one
+    /// pass over a frame's occluders reads memory in order.
+    pub faces: Vec<OccluderFace>,
+    pub verts: Vec<DVec3>,
     /// Outer bounding box of each object (`lo`, `hi`), by id.
     pub boxes: Vec<(DVec3, DVec3)>,
 }
@@ -54,41 +52,70 @@ impl CullScene {
     /// raised ones included: they are drawn as the closed solids they are), occludees
     /// from the objects' bounds.
     pub fn new(scene: &Scene) -> CullScene {
-        let mut occluders = Vec::new();
+        let mut cs = CullScene {
+            occluders: Vec::new(),
+            surface_occluders: 0,
+            faces: Vec::new(),
+            verts: Vec::new(),
+            boxes: Vec::new(),
+        };
         for (id, p) in inner_prisms(scene) {
             let fp = p.footprint.clone().normalized();
-            let mut faces = Vec::new();
-            for verts in prism_faces(&fp, p.base, p.top) {
-                let normal = newell(&verts);
-                if normal.length() == 0.0 {
-                    continue;
-                }
-                let tris = verts.len() as u32 - 2;
-                faces.push(OccluderFace {
-                    offset: normal.dot(verts[0]),
-                    verts,
-                    normal,
-                    tris,
-                });
-            }
             let bb = p.aabb();
-            occluders.push(OccluderPrism {
-                object: id,
-                lo: bb.min,
-                hi: bb.max,
-                faces,
-            });
+            cs.push_occluder(id, bb.min, bb.max, prism_faces(&fp, p.base, p.top));
         }
         let boxes = scene
             .objects
             .iter()
             .map(|o| (o.bounds.min, o.bounds.max))
             .collect();
-        CullScene {
-            occluders,
-            surface_occluders: 0,
-            boxes,
+        cs.boxes = boxes;
+        cs
+    }
+
+    /// Add an occluder of `object` with box `[lo, hi]` made of the planar convex
+    /// `polygons` (degenerate ones left out).
+    fn push_occluder(&mut self, object: u32, lo: DVec3, hi: DVec3, polygons: Vec<Vec<DVec3>>) {
+        let first_face = self.faces.len() as u32;
+        for verts in polygons {
+            let normal = newell(&verts);
+            if !(normal.length() > 0.0) || verts.len() < 3 {
+                continue;
+            }
+            self.faces.push(OccluderFace {
+                first_vert: self.verts.len() as u32,
+                vert_count: verts.len() as u32,
+                normal,
+                offset: normal.dot(verts[0]),
+                tris: verts.len() as u32 - 2,
+            });
+            self.verts.extend_from_slice(&verts);
         }
+        self.occluders.push(OccluderPrism {
+            object,
+            lo,
+            hi,
+            first_face,
+            face_count: self.faces.len() as u32 - first_face,
+        });
+    }
+
+    /// The faces of occluder `o` facing the eye, with their vertices (the back faces of
+    /// a closed prism lie behind its front faces in every direction, so they hide
+    /// nothing more).
+    pub fn front_faces(
+        &self,
+        o: &OccluderPrism,
+        eye: DVec3,
+    ) -> impl Iterator<Item = (&OccluderFace, &[DVec3])> {
+        let faces = &self.faces[o.first_face as usize..(o.first_face + o.face_count) as usize];
+        faces
+            .iter()
+            .filter(move |f| eye.dot(f.normal) > f.offset)
+            .map(|f| {
+                let v = &self.verts[f.first_vert as usize..(f.first_vert + f.vert_count) as usize];
+                (f, v)
+            })
     }
 
     /// [`CullScene::new`] plus the surfaces of the mesh objects as occluders: each
@@ -118,28 +145,8 @@ impl CullScene {
                     lo = lo.min(*v);
                     hi = hi.max(*v);
                 }
-                let tris = verts.len() as u32 - 2;
                 let back: Vec<DVec3> = verts.iter().rev().copied().collect();
-                let faces = vec![
-                    OccluderFace {
-                        offset: normal.dot(verts[0]),
-                        verts,
-                        normal,
-                        tris,
-                    },
-                    OccluderFace {
-                        offset: -normal.dot(back[0]),
-                        verts: back,
-                        normal: -normal,
-                        tris,
-                    },
-                ];
-                cs.occluders.push(OccluderPrism {
-                    object: id as u32,
-                    lo,
-                    hi,
-                    faces,
-                });
+                cs.push_occluder(id as u32, lo, hi, vec![verts, back]);
                 cs.surface_occluders += 1;
             }
         }
