@@ -354,7 +354,7 @@ pub enum Command {
         occluders: OccluderArg,
         /// --walk on a scene without blocks (a BSP or mesh level): eyes this high above
         /// random floor triangles (scene units; a Quake player's eye is ~46 above the floor).
-        #[arg(long, default_value_t = 1.7)]
+        #[arg(long, default_value_t = 1.7, allow_hyphen_values = true)]
         eye_height: f64,
         #[arg(long)]
         json: bool,

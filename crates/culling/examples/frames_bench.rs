@@ -1,7 +1,9 @@
 //! Benchmark of the from-point cullers on street-level walks through real cities.
 //!
 //! `cargo run --release -p sightline-culling --example frames_bench -- [--frames N]
-//! [--size WxH] [--truth-every K] [SCENE ...]` (default: the project's Lyon and Den Haag
+//! [--size WxH] [--truth-every K] [--full-every K] [--raster-only] [--indoor EYE_HEIGHT]
+//! [SCENE ...]` (`--indoor`: a BSP or mesh level, its surfaces as occluders, eyes above
+//! random floor triangles) (default: the project's Lyon and Den Haag
 //! extracts, 10,000 frames, 1920x1080). Reports per scene:
 //! * occluder triangles/s on one core: the masked tile rasterizer of `hzb` against the
 //!   full-resolution inner-union rasterizer of `sightline-raster`, same frames;
@@ -16,7 +18,7 @@ use glam::DVec3;
 use sightline_culling::masked::RasterPath;
 use sightline_culling::measure::{full_res, full_res_occluded, masked_throughput, Throughput};
 use sightline_culling::truth::FrameTruth;
-use sightline_culling::walk::street_walk;
+use sightline_culling::walk::{floor_frames, street_walk};
 use sightline_culling::{method, CullScene, Frustum};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -46,6 +48,8 @@ fn main() {
     let mut scenes: Vec<PathBuf> = Vec::new();
     // Only the occluder rasterization (scalar, SIMD), for profiling.
     let mut raster_only = false;
+    // Indoor scenes (BSP, meshes): surfaces as occluders, eyes this high above floors.
+    let mut indoor_eye: Option<f64> = None;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
@@ -68,6 +72,13 @@ fn main() {
                     .expect("--full-every K")
             }
             "--raster-only" => raster_only = true,
+            "--indoor" => {
+                indoor_eye = Some(
+                    args.next()
+                        .and_then(|v| v.parse().ok())
+                        .expect("--indoor EYE_HEIGHT"),
+                )
+            }
             "--size" => {
                 let s = args.next().expect("--size WxH");
                 let (a, b) = s.split_once('x').expect("--size WxH");
@@ -87,9 +98,15 @@ fn main() {
     println!("frames_bench: {frames} frames per scene, {w}x{h}, truth every {truth_every}, full-res every {full_every}; one thread");
     for path in scenes {
         let scene = sightline_scene::import::load(&path, &Default::default()).expect("scene loads");
-        let cs = Arc::new(CullScene::new(&scene));
+        let cs = Arc::new(match indoor_eye {
+            Some(_) => CullScene::with_surfaces(&scene),
+            None => CullScene::new(&scene),
+        });
         let truth = FrameTruth::new(&scene);
-        let walk = street_walk(&scene, frames, 42, 60.0);
+        let walk = match indoor_eye {
+            Some(h) => floor_frames(&scene, frames, 42, h, 60.0),
+            None => street_walk(&scene, frames, 42, 60.0),
+        };
         let names = ["hzb", "hom", "hom-approx", "cplp"];
         let cullers: Vec<_> = names
             .iter()
@@ -173,10 +190,11 @@ fn main() {
             }
         }
         println!(
-            "\n## {} ({} objects, {} occluder prisms, {} frames)",
+            "\n## {} ({} objects, {} occluders of which {} mesh surfaces, {} frames)",
             path.display(),
             cs.objects(),
             cs.occluders.len(),
+            cs.surface_occluders,
             walk.len()
         );
         println!(
