@@ -120,8 +120,11 @@ fn main() {
         let mut scalar_rates = Vec::new();
         let mut simd_rates = Vec::new();
         let mut full_rates = Vec::new();
-        let (mut scalar_th, mut simd_th, mut full_th) =
-            (Throughput::default(), Throughput::default(), Throughput::default());
+        let (mut scalar_th, mut simd_th, mut full_th) = (
+            Throughput::default(),
+            Throughput::default(),
+            Throughput::default(),
+        );
         let (mut full_occl, mut hzb_occl_same) = (0usize, 0usize);
         let (mut two_cand, mut two_vis) = (0usize, 0usize);
         let mut total = 0usize;

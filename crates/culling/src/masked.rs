@@ -145,7 +145,9 @@ impl MaskedBuffer {
             && self.height == other.height
             && self.tiles.len() == other.tiles.len()
             && self.tiles.iter().zip(&other.tiles).all(|(a, b)| {
-                a.mask == b.mask && a.z0.to_bits() == b.z0.to_bits() && a.z1.to_bits() == b.z1.to_bits()
+                a.mask == b.mask
+                    && a.z0.to_bits() == b.z0.to_bits()
+                    && a.z1.to_bits() == b.z1.to_bits()
             })
     }
 
@@ -454,7 +456,12 @@ fn chord(edges: &[Edge], y: f64) -> (f64, f64) {
 /// convex polygon of `edges`, one row at a time: the bits of the pixels of band `[j,
 /// j+1]` lying inside both chords `j` and `j + 1` (shrunk by [`EPS_PX`]) are or-ed into
 /// `band[tx][j % TILE_H]`. Returns the tile columns touched, if any.
-fn band_scalar(edges: &[Edge], rows: (i64, i64), wf: f64, band: &mut [[u32; TH]]) -> Option<(u32, u32)> {
+fn band_scalar(
+    edges: &[Edge],
+    rows: (i64, i64),
+    wf: f64,
+    band: &mut [[u32; TH]],
+) -> Option<(u32, u32)> {
     let (mut ctx_lo, mut ctx_hi) = (u32::MAX, 0u32);
     let mut below = chord(edges, rows.0 as f64);
     for j in rows.0..=rows.1 {

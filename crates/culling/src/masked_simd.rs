@@ -70,10 +70,7 @@ fn band_lanes<S: Simd>(
     // Lane r is pixel row j = ja + r, the band [j, j + 1].
     let below = f64x8::from_fn(simd, |r| (ja + r as i64) as f64);
     let above = f64x8::from_fn(simd, |r| (ja + r as i64 + 1) as f64);
-    let (mut lb, mut rb) = (
-        f64x8::splat(simd, f64::MAX),
-        f64x8::splat(simd, f64::MIN),
-    );
+    let (mut lb, mut rb) = (f64x8::splat(simd, f64::MAX), f64x8::splat(simd, f64::MIN));
     let (mut la, mut ra) = (lb, rb);
     for &(ylo, yhi, x0, d) in edges {
         let on_b = below.simd_ge(ylo) & below.simd_le(yhi);
@@ -98,10 +95,8 @@ fn band_lanes<S: Simd>(
     let r = rb.min(ra) - EPS_PX;
     let i0 = l.ceil().max(0.0);
     let i1 = (r.floor() - 1.0).min(wf - 1.0);
-    let ok = below.simd_ge(rows.0 as f64)
-        & below.simd_le(rows.1 as f64)
-        & l.simd_le(r)
-        & i0.simd_le(i1);
+    let ok =
+        below.simd_ge(rows.0 as f64) & below.simd_le(rows.1 as f64) & l.simd_le(r) & i0.simd_le(i1);
     // Covered columns [start, end) per row; empty rows get [NO_SPAN, 0).
     let start = ok.select(i0, f64x8::splat(simd, NO_SPAN));
     let end = ok.select(i1 + 1.0, f64x8::splat(simd, 0.0));

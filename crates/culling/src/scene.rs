@@ -205,7 +205,9 @@ fn is_planar_convex(v: &[DVec3]) -> bool {
     let n = n / len;
     let d = n.dot(v[0]);
     let size = v.iter().map(|p| (*p - v[0]).length()).fold(0.0, f64::max);
-    if v.iter().any(|p| (n.dot(*p) - d).abs() > 1e-6 * size.max(1.0)) {
+    if v.iter()
+        .any(|p| (n.dot(*p) - d).abs() > 1e-6 * size.max(1.0))
+    {
         return false;
     }
     (0..v.len()).all(|k| {

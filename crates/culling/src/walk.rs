@@ -139,7 +139,13 @@ pub fn street_walk(scene: &Scene, n: usize, seed: u64, fov_deg: f64) -> Vec<Path
 /// each eye is `eye_height` above a random point of a random floor triangle (one facing
 /// up within 25°, picked with probability proportional to its area), looking in a random
 /// horizontal direction (pitch −10°…10°). Empty when the scene has no floor.
-pub fn floor_frames(scene: &Scene, n: usize, seed: u64, eye_height: f64, fov_deg: f64) -> Vec<PathFrame> {
+pub fn floor_frames(
+    scene: &Scene,
+    n: usize,
+    seed: u64,
+    eye_height: f64,
+    fov_deg: f64,
+) -> Vec<PathFrame> {
     let mut floors: Vec<([DVec3; 3], f64)> = Vec::new();
     for o in &scene.objects {
         let sightline_scene::Geometry::Mesh(m) = &o.geometry else {

@@ -60,8 +60,14 @@ fn same_after_each(w: u32, h: u32, polys: &[PolyParams]) -> Result<(), TestCaseE
         scalar.draw_polygon(&p);
         best.draw_polygon(&p);
         base.draw_polygon(&p);
-        prop_assert!(scalar.same_tiles(&best), "best SIMD level differs after polygon {k}: {p:?}");
-        prop_assert!(scalar.same_tiles(&base), "baseline SIMD differs after polygon {k}: {p:?}");
+        prop_assert!(
+            scalar.same_tiles(&best),
+            "best SIMD level differs after polygon {k}: {p:?}"
+        );
+        prop_assert!(
+            scalar.same_tiles(&base),
+            "baseline SIMD differs after polygon {k}: {p:?}"
+        );
     }
     Ok(())
 }

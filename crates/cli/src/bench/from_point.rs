@@ -10,16 +10,17 @@
 use super::experiments::{Bench, NamedScene};
 use super::plots::{line_chart, Scale, Series};
 use super::report::{Report, Table};
-use sightline_geom::DVec3;
 use serde::Serialize;
 use sightline_culling::masked::RasterPath;
 use sightline_culling::measure::{full_res, full_res_occluded, masked_throughput};
 use sightline_culling::truth::FrameTruth;
 use sightline_culling::walk::{street_walk, PathFrame};
 use sightline_culling::{method, CullScene, Culler, Frustum};
+use sightline_geom::DVec3;
 use sightline_geom::ViewCell;
 use sightline_methods::{create, MethodOptions};
 use sightline_stats::{median, quantile};
+use std::collections::hash_map::Entry;
 use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
@@ -169,15 +170,17 @@ fn walk_plot(b: &Bench, s: &NamedScene) -> anyhow::Result<(Vec<Series>, f64)> {
             (f.eye.x / PVS_CELL_M).floor() as i64,
             (f.eye.y / PVS_CELL_M).floor() as i64,
         );
-        if !pvs_cache.contains_key(&key) {
-            let (x0, y0) = (key.0 as f64 * PVS_CELL_M, key.1 as f64 * PVS_CELL_M);
-            let cell = ViewCell::new(
-                DVec3::new(x0, y0, 1.5),
-                DVec3::new(x0 + PVS_CELL_M, y0 + PVS_CELL_M, 2.0),
-            )?;
-            pvs_cache.insert(key, region.pvs(&cell)?);
-        }
-        let pvs = &pvs_cache[&key];
+        let pvs = match pvs_cache.entry(key) {
+            Entry::Occupied(e) => e.into_mut(),
+            Entry::Vacant(e) => {
+                let (x0, y0) = (key.0 as f64 * PVS_CELL_M, key.1 as f64 * PVS_CELL_M);
+                let cell = ViewCell::new(
+                    DVec3::new(x0, y0, 1.5),
+                    DVec3::new(x0 + PVS_CELL_M, y0 + PVS_CELL_M, 2.0),
+                )?;
+                e.insert(region.pvs(&cell)?)
+            }
+        };
         let fr = hzb.cull(&f, Some(pvs));
         let x = k as f64;
         first.push((x, pvs.len() as f64));
@@ -301,7 +304,11 @@ pub fn from_point(
     rep.table(&raster);
     rep.table(&methods);
     // The walk plot on the first real scene (Lyon by default), else the generated city.
-    let s = all.iter().copied().find(|s| s.name.contains("lyon")).unwrap_or(scenes.get(1).unwrap_or(&scenes[0]));
+    let s = all
+        .iter()
+        .copied()
+        .find(|s| s.name.contains("lyon"))
+        .unwrap_or(scenes.get(1).unwrap_or(&scenes[0]));
     b.log(&format!("from-point walk plot on {}", s.name));
     match walk_plot(b, s) {
         Ok((series, removed)) => {

@@ -2,14 +2,14 @@
 //! optional two-level culling inside the PVS of the eye's cell.
 
 use crate::cli::Command;
+use crate::cli::OccluderArg;
 use crate::common::{load_scene, print_json, progress};
 use anyhow::{bail, Context};
-use crate::cli::OccluderArg;
 use sightline_culling::walk::{floor_frames, street_walk, PathFrame};
-use sightline_scene::Geometry;
 use sightline_culling::{method, CullScene, Frustum};
 use sightline_geom::DVec3;
 use sightline_pvs::PvsFile;
+use sightline_scene::Geometry;
 use std::sync::Arc;
 use std::time::Instant;
 
