@@ -279,6 +279,10 @@ pub enum Command {
         methods: Option<String>,
         #[arg(short, long, default_value = "report")]
         out: PathBuf,
+        /// Comma-separated experiments to run (default all): `Fig. 9`, `side by side`,
+        /// `Table 1`, `Fig. 12 + sweep`, `scaling`, `from-point`.
+        #[arg(long)]
+        only: Option<String>,
     },
     /// Serve a scene (and optionally a .pvs) to walkthrough clients.
     #[command(after_help = methods_help())]

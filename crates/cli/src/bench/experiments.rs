@@ -814,6 +814,21 @@ pub fn run(
             Box::new(|b, r| super::from_point::from_point(b, &scenes, r, out)),
         ),
     ];
+    let known: Vec<&str> = experiments.iter().map(|e| e.0).collect();
+    let experiments: Vec<(&str, Experiment)> = match &suite.only {
+        None => experiments,
+        Some(only) => {
+            for o in only {
+                if !known.iter().any(|k| k.eq_ignore_ascii_case(o)) {
+                    anyhow::bail!("unknown experiment '{o}' (known: {})", known.join(", "));
+                }
+            }
+            experiments
+                .into_iter()
+                .filter(|e| only.iter().any(|o| o.eq_ignore_ascii_case(e.0)))
+                .collect()
+        }
+    };
     let total = experiments.len();
     let mut parts: Vec<(&str, f64)> = Vec::new();
     for (name, run) in experiments {
@@ -895,6 +910,7 @@ mod tests {
             from_point_truth_every: 1,
             from_point_walk_frames: 3,
             from_point_scenes: vec![],
+            only: None,
         };
         let dir = std::env::temp_dir().join(format!("sightline-bench-{}", std::process::id()));
         let methods = vec!["dual-ray".to_string(), "dual-ray-exact".to_string()];

@@ -39,6 +39,9 @@ pub struct Suite {
     /// Scene files the from-point section adds when present and not given with
     /// `--scene` (relative to the working directory: the repository's `data/`).
     pub from_point_scenes: Vec<String>,
+    /// Run only these experiments (`bench --only`; names as in the report's footer,
+    /// case-insensitive); all when `None`.
+    pub only: Option<Vec<String>>,
 }
 
 impl Suite {
@@ -67,6 +70,7 @@ impl Suite {
                 from_point_truth_every: 4,
                 from_point_walk_frames: 60,
                 from_point_scenes: vec!["data/lyon1_bdtopo.geojson".into()],
+                only: None,
             }),
             "full" => Ok(Suite {
                 name: "full".into(),
@@ -91,6 +95,7 @@ impl Suite {
                 from_point_truth_every: 10,
                 from_point_walk_frames: 200,
                 from_point_scenes: vec!["data/lyon1_bdtopo.geojson".into()],
+                only: None,
             }),
             other => anyhow::bail!("unknown suite '{other}' (known: quick, full)"),
         }
