@@ -215,3 +215,34 @@ fn is_planar_convex(v: &[DVec3]) -> bool {
         (b - a).cross(c - b).dot(n) >= 0.0
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fan(v: Vec<DVec3>) -> Mesh {
+        let triangles = (1..v.len() as u32 - 1).map(|k| [0, k, k + 1]).collect();
+        Mesh {
+            vertices: v,
+            triangles,
+        }
+    }
+
+    #[test]
+    fn a_planar_convex_fan_is_one_polygon_else_its_triangles() {
+        let quad = vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(4.0, 0.0, 0.0),
+            DVec3::new(4.0, 0.0, 3.0),
+            DVec3::new(0.0, 0.0, 3.0),
+        ];
+        assert_eq!(surface_polygons(&fan(quad.clone())).len(), 1);
+        // A dent makes it non-convex; a lifted corner non-planar: triangles then.
+        let mut dent = quad.clone();
+        dent.insert(2, DVec3::new(2.0, 0.0, 1.0));
+        assert_eq!(surface_polygons(&fan(dent)).len(), 3);
+        let mut bent = quad;
+        bent[2].y = 0.5;
+        assert_eq!(surface_polygons(&fan(bent)).len(), 2);
+    }
+}
