@@ -290,6 +290,10 @@ pub enum Command {
         indoor_only: bool,
         #[arg(short, long, default_value = "report")]
         out: PathBuf,
+        /// Comma-separated experiments to run (default all): `Fig. 9`, `side by side`,
+        /// `Table 1`, `Fig. 12 + sweep`, `scaling`, `from-point`.
+        #[arg(long)]
+        only: Option<String>,
     },
     /// Serve a scene (and optionally a .pvs) to walkthrough clients.
     #[command(after_help = methods_help())]
@@ -357,9 +361,26 @@ pub enum Command {
         /// Frame size `WIDTHxHEIGHT` in pixels.
         #[arg(long, default_value = "1920x1080")]
         size: String,
+        /// Occluders: the objects' inner prisms (`prisms`), or also the surfaces of mesh
+        /// objects, each triangle or convex face hiding what is entirely behind it
+        /// (`surfaces`: a BSP level's world faces bounding its solid, a mesh level's
+        /// opaque triangles); `auto` takes `surfaces` when the scene has meshes.
+        #[arg(long, value_enum, default_value_t = OccluderArg::Auto)]
+        occluders: OccluderArg,
+        /// --walk on a scene without blocks (a BSP or mesh level): eyes this high above
+        /// random floor triangles (scene units; a Quake player's eye is ~46 above the floor).
+        #[arg(long, default_value_t = 1.7, allow_hyphen_values = true)]
+        eye_height: f64,
         #[arg(long)]
         json: bool,
     },
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum OccluderArg {
+    Auto,
+    Prisms,
+    Surfaces,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]

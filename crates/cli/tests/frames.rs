@@ -219,3 +219,52 @@ fn bad_input_is_a_one_line_error() {
     let o = sightline(&["frames", path(&lyon), "--walk", "0"]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("--walk"));
 }
+
+#[test]
+fn a_bsp_level_walk_uses_its_faces_as_occluders() {
+    let bsp = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/quake/dm1.bsp");
+    let o = sightline(&[
+        "frames",
+        path(&bsp),
+        "--walk",
+        "6",
+        "--eye-height",
+        "46",
+        "--size",
+        "320x180",
+        "--json",
+    ]);
+    let v = json(&o);
+    assert_eq!(v["occluders"], "surfaces");
+    assert!(v["surface_occluders"].as_u64().unwrap() > 1000, "{v}");
+    assert_eq!(v["frames"].as_array().unwrap().len(), 6);
+    let occluded: u64 = v["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["occlusion_culled"].as_u64().unwrap())
+        .sum();
+    assert!(occluded > 0, "{v}");
+    // Prisms only: a BSP level has none, nothing is occlusion-culled.
+    let o = sightline(&[
+        "frames",
+        path(&bsp),
+        "--walk",
+        "2",
+        "--eye-height",
+        "46",
+        "--size",
+        "320x180",
+        "--occluders",
+        "prisms",
+        "--json",
+    ]);
+    let v = json(&o);
+    assert_eq!(v["occluders"], "prisms");
+    for f in v["frames"].as_array().unwrap() {
+        assert_eq!(f["occlusion_culled"], 0, "{f}");
+    }
+    let o = sightline(&["frames", path(&bsp), "--walk", "2", "--eye-height", "-1"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--eye-height"));
+}

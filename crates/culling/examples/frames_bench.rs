@@ -1,7 +1,9 @@
 //! Benchmark of the from-point cullers on street-level walks through real cities.
 //!
 //! `cargo run --release -p sightline-culling --example frames_bench -- [--frames N]
-//! [--size WxH] [--truth-every K] [SCENE ...]` (default: the project's Lyon and Den Haag
+//! [--size WxH] [--truth-every K] [--full-every K] [--raster-only] [--indoor EYE_HEIGHT]
+//! [SCENE ...]` (`--indoor`: a BSP or mesh level, its surfaces as occluders, eyes above
+//! random floor triangles) (default: the project's Lyon and Den Haag
 //! extracts, 10,000 frames, 1920x1080). Reports per scene:
 //! * occluder triangles/s on one core: the masked tile rasterizer of `hzb` against the
 //!   full-resolution inner-union rasterizer of `sightline-raster`, same frames;
@@ -13,12 +15,11 @@
 //!   answer of a wider frustum from the same eye), how much the second level removes.
 
 use glam::DVec3;
-use sightline_culling::frustum::{box_in_view, clip_project, BoxInView};
-use sightline_culling::hzb::draw_occluders;
+use sightline_culling::masked::RasterPath;
+use sightline_culling::measure::{full_res, full_res_occluded, masked_throughput, Throughput};
 use sightline_culling::truth::FrameTruth;
-use sightline_culling::walk::street_walk;
+use sightline_culling::walk::{floor_frames, street_walk};
 use sightline_culling::{method, CullScene, Frustum};
-use sightline_raster::{Framebuffer, ScreenVertex};
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
@@ -39,37 +40,16 @@ fn p90(v: &mut [f64]) -> f64 {
     v[(v.len() * 9 / 10).min(v.len() - 1)]
 }
 
-/// Full-resolution reference: every in-frustum prism's front faces drawn as one inner
-/// union into a per-pixel depth buffer, then the max-depth pyramid.
-fn full_res(cs: &CullScene, f: &Frustum) -> (Framebuffer, u64) {
-    let view = f.view();
-    let mut fb = Framebuffer::for_view(view);
-    let mut tris = 0;
-    let mut scratch = Vec::new();
-    let mut pieces: Vec<Vec<ScreenVertex>> = Vec::new();
-    for o in &cs.occluders {
-        if box_in_view(view, o.lo, o.hi) == BoxInView::Outside {
-            continue;
-        }
-        pieces.clear();
-        for face in o.front_faces(f.eye) {
-            tris += face.tris as u64;
-            if clip_project(view, &face.verts, &mut scratch) {
-                pieces.push(scratch.clone());
-            }
-        }
-        let refs: Vec<&[ScreenVertex]> = pieces.iter().map(|p| p.as_slice()).collect();
-        fb.draw_screen_union(&refs, o.object);
-    }
-    (fb, tris)
-}
-
 fn main() {
     let mut frames = 10_000usize;
     let (mut w, mut h) = (1920u32, 1080u32);
     let mut truth_every = 50usize;
     let mut full_every = 10usize;
     let mut scenes: Vec<PathBuf> = Vec::new();
+    // Only the occluder rasterization (scalar, SIMD), for profiling.
+    let mut raster_only = false;
+    // Indoor scenes (BSP, meshes): surfaces as occluders, eyes this high above floors.
+    let mut indoor_eye: Option<f64> = None;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
@@ -91,6 +71,14 @@ fn main() {
                     .and_then(|v| v.parse().ok())
                     .expect("--full-every K")
             }
+            "--raster-only" => raster_only = true,
+            "--indoor" => {
+                indoor_eye = Some(
+                    args.next()
+                        .and_then(|v| v.parse().ok())
+                        .expect("--indoor EYE_HEIGHT"),
+                )
+            }
             "--size" => {
                 let s = args.next().expect("--size WxH");
                 let (a, b) = s.split_once('x').expect("--size WxH");
@@ -110,9 +98,15 @@ fn main() {
     println!("frames_bench: {frames} frames per scene, {w}x{h}, truth every {truth_every}, full-res every {full_every}; one thread");
     for path in scenes {
         let scene = sightline_scene::import::load(&path, &Default::default()).expect("scene loads");
-        let cs = Arc::new(CullScene::new(&scene));
+        let cs = Arc::new(match indoor_eye {
+            Some(_) => CullScene::with_surfaces(&scene),
+            None => CullScene::new(&scene),
+        });
         let truth = FrameTruth::new(&scene);
-        let walk = street_walk(&scene, frames, 42, 60.0);
+        let walk = match indoor_eye {
+            Some(h) => floor_frames(&scene, frames, 42, h, 60.0),
+            None => street_walk(&scene, frames, 42, 60.0),
+        };
         let names = ["hzb", "hom", "hom-approx", "cplp"];
         let cullers: Vec<_> = names
             .iter()
@@ -123,8 +117,14 @@ fn main() {
         let mut occl = vec![0usize; names.len()];
         let mut false_culls = vec![0usize; names.len()];
         let mut truth_frames = 0usize;
-        let (mut masked_tris, mut masked_s) = (0u64, 0.0f64);
-        let (mut full_tris, mut full_s) = (0u64, 0.0f64);
+        let mut scalar_rates = Vec::new();
+        let mut simd_rates = Vec::new();
+        let mut full_rates = Vec::new();
+        let (mut scalar_th, mut simd_th, mut full_th) = (
+            Throughput::default(),
+            Throughput::default(),
+            Throughput::default(),
+        );
         let (mut full_occl, mut hzb_occl_same) = (0usize, 0usize);
         let (mut two_cand, mut two_vis) = (0usize, 0usize);
         let mut total = 0usize;
@@ -140,7 +140,7 @@ fn main() {
             .unwrap();
             total += cs.objects();
             let mut answers = Vec::new();
-            for (m, c) in cullers.iter().enumerate() {
+            for (m, c) in cullers.iter().enumerate().filter(|_| !raster_only) {
                 let t0 = Instant::now();
                 let fr = c.cull(&f, None);
                 ms[m].push(t0.elapsed().as_secs_f64() * 1e3);
@@ -153,24 +153,24 @@ fn main() {
             }
             // Rasterizer throughput: every front face in the frustum (no skipping of
             // hidden prisms), the same faces the full-resolution reference draws.
-            let t0 = Instant::now();
-            let (_buf, tris) = draw_occluders(&cs, &f, None, false);
-            masked_s += t0.elapsed().as_secs_f64();
-            masked_tris += tris;
+            for (path, th, rates) in [
+                (RasterPath::Scalar, &mut scalar_th, &mut scalar_rates),
+                (RasterPath::Simd, &mut simd_th, &mut simd_rates),
+            ] {
+                let t = masked_throughput(&cs, &f, path);
+                th.tris += t.tris;
+                th.seconds += t.seconds;
+                rates.push(t.tris_per_s());
+            }
+            if raster_only {
+                continue;
+            }
             if k % full_every == 0 {
-                let t0 = Instant::now();
-                let (fb, tris) = full_res(&cs, &f);
-                full_s += t0.elapsed().as_secs_f64();
-                full_tris += tris;
-                let pyr = fb.pyramid();
-                for (lo, hi) in &cs.boxes {
-                    if let Some(([i0, j0, i1, j1], z_near)) = box_in_view(f.view(), *lo, *hi).rect()
-                    {
-                        if pyr.rect_occluded(i0, j0, i1, j1, z_near) {
-                            full_occl += 1;
-                        }
-                    }
-                }
+                let (fb, t) = full_res(&cs, &f);
+                full_th.tris += t.tris;
+                full_th.seconds += t.seconds;
+                full_rates.push(t.tris_per_s());
+                full_occl += full_res_occluded(&cs, &f, &fb);
                 hzb_occl_same += answers[0].occlusion_culled;
             }
             if k % truth_every == 0 {
@@ -193,21 +193,25 @@ fn main() {
             }
         }
         println!(
-            "\n## {} ({} objects, {} occluder prisms, {} frames)",
+            "\n## {} ({} objects, {} occluders of which {} mesh surfaces, {} frames)",
             path.display(),
             cs.objects(),
             cs.occluders.len(),
+            cs.surface_occluders,
             walk.len()
         );
         println!(
-            "occluder tris/s (one core): masked tiles {:.2} M ({} tris in {:.2} s); sightline-raster full-res union {:.3} M ({} tris in {:.2} s)",
-            masked_tris as f64 / masked_s / 1e6, masked_tris, masked_s,
-            full_tris as f64 / full_s.max(1e-9) / 1e6, full_tris, full_s
+            "occluder tris/s (one core, median of frames / total): masked scalar {:.2} / {:.2} M; masked {} {:.2} / {:.2} M; sightline-raster full-res union {:.2} / {:.2} M ({} tris in {:.2} s masked, {:.2} s scalar)",
+            median(&mut scalar_rates) / 1e6, scalar_th.tris_per_s() / 1e6,
+            RasterPath::Simd.describe(),
+            median(&mut simd_rates) / 1e6, simd_th.tris_per_s() / 1e6,
+            median(&mut full_rates) / 1e6, full_th.tris_per_s() / 1e6,
+            simd_th.tris, simd_th.seconds, scalar_th.seconds
         );
         println!(
             "hzb draws {:.0} occluder tris per frame (prisms already hidden are skipped) of {:.0} front-facing in the frustum",
             hzb_tris as f64 / walk.len().max(1) as f64,
-            masked_tris as f64 / walk.len().max(1) as f64
+            simd_th.tris as f64 / walk.len().max(1) as f64
         );
         println!(
             "occlusion-culled on the full-res frames: hzb {} vs full-res depth buffer {} ({:.1} %)",

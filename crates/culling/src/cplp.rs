@@ -169,9 +169,9 @@ impl Culler for Cplp {
                     if b == BoxInView::Outside || hidden {
                         continue;
                     }
-                    for f in o.front_faces(eye) {
+                    for (f, verts) in self.scene.front_faces(o, eye) {
                         frame.occluder_tris += f.tris as u64;
-                        if clip_project(view, &f.verts, &mut scratch) {
+                        if clip_project(view, verts, &mut scratch) {
                             buf.draw_polygon(&scratch);
                         }
                     }

@@ -196,9 +196,21 @@ pub fn clip_project(view: &View, poly: &[DVec3], out: &mut Vec<ScreenVertex>) ->
     if n < 3 {
         return false;
     }
+    // Each vertex to camera space once (a polygon of a prism has at most a handful).
+    const STACK: usize = 16;
+    let mut stack = [DVec3::ZERO; STACK];
+    let heap: Vec<DVec3>;
+    let cam: &[DVec3] = if n <= STACK {
+        for (c, p) in stack.iter_mut().zip(poly) {
+            *c = view.to_camera(*p);
+        }
+        &stack[..n]
+    } else {
+        heap = poly.iter().map(|p| view.to_camera(*p)).collect();
+        &heap
+    };
     for k in 0..n {
-        let a = view.to_camera(poly[k]);
-        let b = view.to_camera(poly[(k + 1) % n]);
+        let (a, b) = (cam[k], cam[(k + 1) % n]);
         let (ain, bin) = (a.z >= view.near, b.z >= view.near);
         if ain {
             out.push(view.camera_to_screen(a));

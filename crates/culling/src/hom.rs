@@ -220,9 +220,9 @@ impl Culler for Hom {
                 continue;
             }
             pieces.clear();
-            for f in o.front_faces(frustum.eye) {
+            for (f, verts) in self.scene.front_faces(o, frustum.eye) {
                 frame.occluder_tris += f.tris as u64;
-                if clip_project(&view, &f.verts, &mut scratch) {
+                if clip_project(&view, verts, &mut scratch) {
                     pieces.push(scratch.clone());
                 }
             }

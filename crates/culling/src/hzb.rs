@@ -13,7 +13,7 @@
 //! step only over-estimates what is visible; ties are visible). Knobs: the frame size.
 
 use crate::frustum::{box_in_view, clip_project, BoxInView, Frustum};
-use crate::masked::MaskedBuffer;
+use crate::masked::{MaskedBuffer, RasterPath};
 use crate::scene::CullScene;
 use crate::{Culler, Frame};
 use std::sync::Arc;
@@ -30,17 +30,14 @@ impl Hzb {
     }
 }
 
-/// Draw the occluders of `scene` (only those of `allowed` objects when given) into a
-/// masked buffer for `frustum`; returns the buffer and the triangles drawn. With
-/// `skip_hidden`, a prism whose box the buffer already hides is not drawn.
-pub fn draw_occluders(
+/// The occluder prisms of `scene` in the frustum (only those of `allowed` objects when
+/// given), nearest first: `(prism index, where its box lies)`.
+pub fn occluder_order(
     scene: &CullScene,
     frustum: &Frustum,
     allowed: Option<&[bool]>,
-    skip_hidden: bool,
-) -> (MaskedBuffer, u64) {
+) -> Vec<(u32, BoxInView)> {
     let view = frustum.view();
-    let mut buf = MaskedBuffer::new(view.width_px, view.height_px);
     let mut order: Vec<(f64, u32, BoxInView)> = Vec::new();
     for (k, o) in scene.occluders.iter().enumerate() {
         if allowed.is_some_and(|a| !a[o.object as usize]) {
@@ -54,9 +51,22 @@ pub fn draw_occluders(
         order.push((d, k as u32, b));
     }
     order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+    order.into_iter().map(|(_, k, b)| (k, b)).collect()
+}
+
+/// Draw the front faces of the prisms of `order` into `buf`; returns the triangles
+/// drawn. With `skip_hidden`, a prism whose box the buffer already hides is not drawn.
+pub fn draw_ordered(
+    buf: &mut MaskedBuffer,
+    scene: &CullScene,
+    frustum: &Frustum,
+    order: &[(u32, BoxInView)],
+    skip_hidden: bool,
+) -> u64 {
+    let view = frustum.view();
     let mut tris = 0u64;
     let mut scratch = Vec::with_capacity(16);
-    for &(_, k, b) in &order {
+    for &(k, b) in order {
         // An occluder already hidden hides nothing that is not hidden already: drawn
         // nearest first, most of a street's far prisms are skipped here.
         if let Some(([i0, j0, i1, j1], z_near)) = b.rect() {
@@ -64,13 +74,32 @@ pub fn draw_occluders(
                 continue;
             }
         }
-        for f in scene.occluders[k as usize].front_faces(frustum.eye) {
+        for (f, verts) in scene.front_faces(&scene.occluders[k as usize], frustum.eye) {
             tris += f.tris as u64;
-            if clip_project(view, &f.verts, &mut scratch) {
+            if clip_project(view, verts, &mut scratch) {
                 buf.draw_polygon(&scratch);
             }
         }
     }
+    tris
+}
+
+/// Draw the occluders of `scene` (only those of `allowed` objects when given) into a
+/// masked buffer for `frustum`, nearest first (the merge rule of [`MaskedBuffer`] keeps
+/// more when near occluders come first); returns the buffer and the triangles drawn.
+/// With `skip_hidden`, a prism whose box the buffer already hides is not drawn. `path`
+/// picks the rasterizer's scalar or SIMD code (same buffer either way).
+pub fn draw_occluders(
+    scene: &CullScene,
+    frustum: &Frustum,
+    allowed: Option<&[bool]>,
+    skip_hidden: bool,
+    path: RasterPath,
+) -> (MaskedBuffer, u64) {
+    let view = frustum.view();
+    let mut buf = MaskedBuffer::with_path(view.width_px, view.height_px, path);
+    let order = occluder_order(scene, frustum, allowed);
+    let tris = draw_ordered(&mut buf, scene, frustum, &order, skip_hidden);
     (buf, tris)
 }
 
@@ -85,7 +114,13 @@ impl Culler for Hzb {
 
     fn cull(&self, frustum: &Frustum, candidates: Option<&[u32]>) -> Frame {
         let allowed = candidates.map(|c| crate::mask_of(c, self.scene.objects()));
-        let (mut buf, tris) = draw_occluders(&self.scene, frustum, allowed.as_deref(), true);
+        let (mut buf, tris) = draw_occluders(
+            &self.scene,
+            frustum,
+            allowed.as_deref(),
+            true,
+            RasterPath::DEFAULT,
+        );
         buf.build_hierarchy();
         let mut frame = Frame::new(self.scene.objects(), candidates);
         frame.occluder_tris = tris;

@@ -41,6 +41,8 @@ pub mod frustum;
 pub mod hom;
 pub mod hzb;
 pub mod masked;
+pub mod masked_simd;
+pub mod measure;
 pub mod scene;
 pub mod truth;
 pub mod walk;

@@ -28,18 +28,19 @@
 //! reference layers answers large rectangles at once.
 
 use crate::frustum::f32_up;
+use fearless_simd::Level;
 use sightline_raster::ScreenVertex;
 
 /// Tile width in pixels (one `u32` mask per row).
 pub const TILE_W: u32 = 32;
 /// Tile height in pixels.
 pub const TILE_H: u32 = 8;
-const TH: usize = TILE_H as usize;
+pub(crate) const TH: usize = TILE_H as usize;
 /// A partial coverage farther than this factor times the working layer's depth is not
 /// merged into it.
 const FAR_MERGE: f32 = 1.5;
 /// Inner coverage shrinks chords by this much (pixels), towards "not covered".
-const EPS_PX: f64 = 1e-7;
+pub(crate) const EPS_PX: f64 = 1e-7;
 
 #[derive(Clone, Copy, Debug)]
 struct Tile {
@@ -68,7 +69,39 @@ pub struct MaskedBuffer {
     levels: Vec<(u32, u32, Vec<f32>)>,
     /// Polygons drawn (after near clipping and off-screen rejection).
     pub polygons_drawn: u64,
+    path: RasterPath,
+    level: Level,
 }
+
+/// Which code computes the coverage masks of a band of tile rows. Both give the same
+/// buffer bit for bit (the SIMD lanes do the scalar code's `f64` operations in the same
+/// order, without fused multiply-adds); a property test holds them to it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RasterPath {
+    /// One pixel row at a time, scalar `f64` code.
+    Scalar,
+    /// The eight pixel rows of a tile at once in SIMD lanes ([`crate::masked_simd`]), with
+    /// the best instruction set the CPU has, chosen at run time (SSE2 is the x86-64
+    /// baseline; AVX2 and AVX-512 when present).
+    Simd,
+}
+
+impl RasterPath {
+    /// The path used when none is asked for: [`RasterPath::Simd`].
+    pub const DEFAULT: RasterPath = RasterPath::Simd;
+
+    /// Its name in reports (`scalar`, or `simd-` and the instruction set chosen).
+    pub fn describe(self) -> String {
+        match self {
+            RasterPath::Scalar => "scalar".into(),
+            RasterPath::Simd => format!("simd-{}", crate::masked_simd::level_name(Level::new())),
+        }
+    }
+}
+
+/// A convex polygon's edge: `(y_lo, y_hi, x at y_lo, dx/dy)`, lower endpoint first; a
+/// horizontal edge is `(y, y, x_min, x_max - x_min)`, flagged by `y_lo == y_hi`.
+pub(crate) type Edge = (f64, f64, f64, f64);
 
 impl MaskedBuffer {
     /// An empty buffer (every depth `+∞`).
@@ -84,7 +117,38 @@ impl MaskedBuffer {
             band: vec![[0; TH]; tiles_x as usize],
             levels: Vec::new(),
             polygons_drawn: 0,
+            path: RasterPath::DEFAULT,
+            level: Level::new(),
         }
+    }
+
+    /// An empty buffer drawn by `path`.
+    pub fn with_path(width: u32, height: u32, path: RasterPath) -> MaskedBuffer {
+        MaskedBuffer {
+            path,
+            ..MaskedBuffer::new(width, height)
+        }
+    }
+
+    /// An empty buffer drawn by the SIMD path at `level` (tests compare the levels).
+    pub fn with_simd_level(width: u32, height: u32, level: Level) -> MaskedBuffer {
+        MaskedBuffer {
+            path: RasterPath::Simd,
+            level,
+            ..MaskedBuffer::new(width, height)
+        }
+    }
+
+    /// Whether two buffers hold the same tiles (masks and both depth layers).
+    pub fn same_tiles(&self, other: &MaskedBuffer) -> bool {
+        self.width == other.width
+            && self.height == other.height
+            && self.tiles.len() == other.tiles.len()
+            && self.tiles.iter().zip(&other.tiles).all(|(a, b)| {
+                a.mask == b.mask
+                    && a.z0.to_bits() == b.z0.to_bits()
+                    && a.z1.to_bits() == b.z1.to_bits()
+            })
     }
 
     /// The bits of tile `(tx, ty)`'s row `r` that lie on the screen.
@@ -103,6 +167,9 @@ impl MaskedBuffer {
 
     #[inline]
     fn full(&self, tx: u32, ty: u32, m: &[u32; TH]) -> bool {
+        if tx + 1 < self.tiles_x && ty + 1 < self.tiles_y {
+            return m.iter().all(|&r| r == u32::MAX);
+        }
         (0..TH).all(|r| m[r] | !self.valid(tx, ty, r) == u32::MAX)
     }
 
@@ -173,7 +240,7 @@ impl MaskedBuffer {
             // occluder out is conservative.
             return;
         }
-        let mut edges = [(0f64, 0f64, 0f64, 0f64); MAX_EDGES];
+        let mut edges: [Edge; MAX_EDGES] = [(0.0, 0.0, 0.0, 0.0); MAX_EDGES];
         for (k, e) in edges.iter_mut().enumerate().take(n) {
             let (a, b) = (v[k], v[(k + 1) % n]);
             let (lo, hi) = if a.y <= b.y { (a, b) } else { (b, a) };
@@ -184,64 +251,30 @@ impl MaskedBuffer {
             };
         }
         let edges = &edges[..n];
-        let chord = |y: f64| -> (f64, f64) {
-            let (mut l, mut r) = (f64::MAX, f64::MIN);
-            for &(ylo, yhi, x0, d) in edges {
-                if ylo <= y && y <= yhi {
-                    if yhi == ylo {
-                        l = l.min(x0);
-                        r = r.max(x0 + d);
-                    } else {
-                        let x = x0 + (y - ylo) * d;
-                        l = l.min(x);
-                        r = r.max(x);
-                    }
-                }
-            }
-            (l, r)
-        };
         let tx_lo = (xmin.max(0.0) as u32 / TILE_W).min(self.tiles_x - 1);
         let tx_hi = ((xmax.min(wf - 1.0)).max(0.0) as u32 / TILE_W).min(self.tiles_x - 1);
+        debug_assert!(self.band[tx_lo as usize..=tx_hi as usize]
+            .iter()
+            .all(|b| *b == [0; TH]));
         let ty_lo = j0 as u32 / TILE_H;
         let ty_hi = j1 as u32 / TILE_H;
-        let mut below = chord(j0 as f64);
         for ty in ty_lo..=ty_hi {
-            for b in &mut self.band[tx_lo as usize..=tx_hi as usize] {
-                *b = [0; TH];
-            }
-            let (mut ctx_lo, mut ctx_hi) = (u32::MAX, 0u32);
             let ja = (ty * TILE_H) as i64;
-            for j in ja.max(j0)..=(ja + TH as i64 - 1).min(j1) {
-                let above = chord((j + 1) as f64);
-                let l = below.0.max(above.0) + EPS_PX;
-                let r = below.1.min(above.1) - EPS_PX;
-                below = above;
-                if !(l <= r) {
-                    continue;
+            let rows = (ja.max(j0), (ja + TH as i64 - 1).min(j1));
+            let touched = match self.path {
+                RasterPath::Scalar => band_scalar(edges, rows, wf, &mut self.band),
+                RasterPath::Simd => {
+                    crate::masked_simd::band(self.level, edges, ja, rows, wf, &mut self.band)
                 }
-                let i0 = l.ceil().max(0.0);
-                let i1 = (r.floor() - 1.0).min(wf - 1.0);
-                if i0 > i1 {
-                    continue;
-                }
-                let (i0, i1) = (i0 as u32, i1 as u32);
-                let row = (j - ja) as usize;
-                for tx in i0 / TILE_W..=i1 / TILE_W {
-                    let a = i0.max(tx * TILE_W) - tx * TILE_W;
-                    let b = i1.min(tx * TILE_W + TILE_W - 1) - tx * TILE_W;
-                    let bits = (u32::MAX >> (31 - b)) & (u32::MAX << a);
-                    self.band[tx as usize][row] |= bits;
-                }
-                ctx_lo = ctx_lo.min(i0 / TILE_W);
-                ctx_hi = ctx_hi.max(i1 / TILE_W);
-            }
-            if ctx_lo > ctx_hi {
+            };
+            let Some((ctx_lo, ctx_hi)) = touched else {
                 continue;
-            }
+            };
             let y0 = (ty * TILE_H) as f64;
             let (ya, yb) = (y0.max(ymin), (y0 + TILE_H as f64).min(ymax));
             for tx in ctx_lo..=ctx_hi {
-                let cov = self.band[tx as usize];
+                // Taken, leaving the band empty for the next one.
+                let cov = std::mem::take(&mut self.band[tx as usize]);
                 if cov.iter().all(|&m| m == 0) {
                     continue;
                 }
@@ -397,6 +430,64 @@ impl MaskedBuffer {
             t.z1
         }
     }
+}
+
+/// The x-range `(left, right)` of the polygon of `edges` on the line `y` (`left > right`
+/// when the line misses it).
+#[inline]
+fn chord(edges: &[Edge], y: f64) -> (f64, f64) {
+    let (mut l, mut r) = (f64::MAX, f64::MIN);
+    for &(ylo, yhi, x0, d) in edges {
+        if ylo <= y && y <= yhi {
+            if yhi == ylo {
+                l = l.min(x0);
+                r = r.max(x0 + d);
+            } else {
+                let x = x0 + (y - ylo) * d;
+                l = l.min(x);
+                r = r.max(x);
+            }
+        }
+    }
+    (l, r)
+}
+
+/// Inner coverage of the pixel rows `rows.0 ..= rows.1` (one band of tiles) by the
+/// convex polygon of `edges`, one row at a time: the bits of the pixels of band `[j,
+/// j+1]` lying inside both chords `j` and `j + 1` (shrunk by [`EPS_PX`]) are or-ed into
+/// `band[tx][j % TILE_H]`. Returns the tile columns touched, if any.
+fn band_scalar(
+    edges: &[Edge],
+    rows: (i64, i64),
+    wf: f64,
+    band: &mut [[u32; TH]],
+) -> Option<(u32, u32)> {
+    let (mut ctx_lo, mut ctx_hi) = (u32::MAX, 0u32);
+    let mut below = chord(edges, rows.0 as f64);
+    for j in rows.0..=rows.1 {
+        let above = chord(edges, (j + 1) as f64);
+        let l = below.0.max(above.0) + EPS_PX;
+        let r = below.1.min(above.1) - EPS_PX;
+        below = above;
+        if !(l <= r) {
+            continue;
+        }
+        let i0 = l.ceil().max(0.0);
+        let i1 = (r.floor() - 1.0).min(wf - 1.0);
+        if i0 > i1 {
+            continue;
+        }
+        let (i0, i1) = (i0 as u32, i1 as u32);
+        let row = (j as u32 % TILE_H) as usize;
+        for tx in i0 / TILE_W..=i1 / TILE_W {
+            let a = i0.max(tx * TILE_W) - tx * TILE_W;
+            let b = i1.min(tx * TILE_W + TILE_W - 1) - tx * TILE_W;
+            band[tx as usize][row] |= (u32::MAX >> (31 - b)) & (u32::MAX << a);
+        }
+        ctx_lo = ctx_lo.min(i0 / TILE_W);
+        ctx_hi = ctx_hi.max(i1 / TILE_W);
+    }
+    (ctx_lo <= ctx_hi).then_some((ctx_lo, ctx_hi))
 }
 
 #[cfg(test)]

@@ -134,3 +134,62 @@ pub fn street_walk(scene: &Scene, n: usize, seed: u64, fov_deg: f64) -> Vec<Path
     }
     out
 }
+
+/// Deterministic indoor frames for a scene of meshes (a BSP level's faces, a mesh level):
+/// each eye is `eye_height` above a random point of a random floor triangle (one facing
+/// up within 25°, picked with probability proportional to its area), looking in a random
+/// horizontal direction (pitch −10°…10°). Empty when the scene has no floor.
+pub fn floor_frames(
+    scene: &Scene,
+    n: usize,
+    seed: u64,
+    eye_height: f64,
+    fov_deg: f64,
+) -> Vec<PathFrame> {
+    let mut floors: Vec<([DVec3; 3], f64)> = Vec::new();
+    for o in &scene.objects {
+        let sightline_scene::Geometry::Mesh(m) = &o.geometry else {
+            continue;
+        };
+        for t in &m.triangles {
+            if t.iter().any(|&i| i as usize >= m.vertices.len()) {
+                continue;
+            }
+            let tri = m.triangle(t);
+            let nrm = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+            let area2 = nrm.length();
+            if area2 > 0.0 && nrm.z / area2 > 25f64.to_radians().cos() {
+                floors.push((tri, area2));
+            }
+        }
+    }
+    let total: f64 = floors.iter().map(|f| f.1).sum();
+    let mut out = Vec::with_capacity(n);
+    if floors.is_empty() || !(total > 0.0) {
+        return out;
+    }
+    let mut rng = Rng::new(seed);
+    while out.len() < n {
+        let mut pick = rng.range(0.0, total);
+        let tri = floors
+            .iter()
+            .find(|f| {
+                pick -= f.1;
+                pick <= 0.0
+            })
+            .map_or(floors[floors.len() - 1].0, |f| f.0);
+        let (mut a, mut b) = (rng.range(0.0, 1.0), rng.range(0.0, 1.0));
+        if a + b > 1.0 {
+            (a, b) = (1.0 - a, 1.0 - b);
+        }
+        let p = tri[0] + (tri[1] - tri[0]) * a + (tri[2] - tri[0]) * b;
+        let az = rng.range(0.0, std::f64::consts::TAU);
+        let pitch = rng.range(-10.0f64, 10.0).to_radians();
+        out.push(PathFrame {
+            eye: (p + DVec3::Z * eye_height).to_array(),
+            dir: [az.cos() * pitch.cos(), az.sin() * pitch.cos(), pitch.sin()],
+            fov_deg,
+        });
+    }
+    out
+}

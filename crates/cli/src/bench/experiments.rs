@@ -68,6 +68,7 @@ pub struct Bench {
     /// The indoor section's levels.
     pub indoor: Vec<IndoorRecord>,
     pub notes: Vec<String>,
+    pub from_point: Vec<super::from_point::FromPointRecord>,
     truths: HashMap<(String, String), Vec<u32>>,
     quiet: bool,
 }
@@ -103,12 +104,13 @@ impl Bench {
             records: vec![],
             indoor: vec![],
             notes: vec![],
+            from_point: vec![],
             truths: HashMap::new(),
             quiet,
         }
     }
 
-    fn log(&self, msg: &str) {
+    pub(crate) fn log(&self, msg: &str) {
         if !self.quiet {
             eprintln!("bench: {msg}");
         }
@@ -830,6 +832,10 @@ pub fn run(
             Box::new(|b, r| ext_proj(b, &scenes[0], r, out)),
         ));
         experiments.push(("scaling", Box::new(|b, r| scaling(b, &names, r, out))));
+        experiments.push((
+            "from-point",
+            Box::new(|b, r| super::from_point::from_point(b, &scenes, r, out)),
+        ));
     }
     // One experiment per level, so that raw.json is written after each (a long run that
     // is stopped keeps its levels), then the section.
@@ -854,6 +860,21 @@ pub fn run(
             Box::new(|b, r| super::indoor::write_section(&b.suite, &b.indoor, r, out)),
         ));
     }
+    let known: Vec<&str> = experiments.iter().map(|e| e.0).collect();
+    let experiments: Vec<(&str, Experiment)> = match &suite.only {
+        None => experiments,
+        Some(only) => {
+            for o in only {
+                if !known.iter().any(|k| k.eq_ignore_ascii_case(o)) {
+                    anyhow::bail!("unknown experiment '{o}' (known: {})", known.join(", "));
+                }
+            }
+            experiments
+                .into_iter()
+                .filter(|e| only.iter().any(|o| o.eq_ignore_ascii_case(e.0)))
+                .collect()
+        }
+    };
     anyhow::ensure!(
         !experiments.is_empty(),
         "nothing to run: --indoor-only needs a level (--levels LEVEL.bsp|FOLDER)"
@@ -894,6 +915,7 @@ fn write_report(
         machine: &'a Machine,
         records: &'a [Record],
         indoor: &'a [IndoorRecord],
+        from_point: &'a [super::from_point::FromPointRecord],
         notes: &'a [String],
     }
     let raw = serde_json::to_vec_pretty(&Raw {
@@ -901,6 +923,7 @@ fn write_report(
         machine,
         records: &b.records,
         indoor: &b.indoor,
+        from_point: &b.from_point,
         notes: &b.notes,
     })?;
     crate::common::write_atomic(&out.join("raw.json"), &raw)?;
@@ -934,6 +957,13 @@ mod tests {
             truth_samples: Some(8),
             truth_resolution_px: Some(64),
             indoor_sources: 4,
+            from_point_frames: 3,
+            from_point_size: (160, 90),
+            from_point_full_every: 1,
+            from_point_truth_every: 1,
+            from_point_walk_frames: 3,
+            from_point_scenes: vec![],
+            only: None,
         };
         let dir = std::env::temp_dir().join(format!("sightline-bench-{}", std::process::id()));
         let methods = vec!["dual-ray".to_string(), "dual-ray-exact".to_string()];
@@ -945,14 +975,22 @@ mod tests {
             "Table 1",
             "Fig. 12",
             "Scaling",
+            "From-point culling",
         ] {
             assert!(md.contains(section), "missing section {section}:\n{md}");
         }
         assert!(md.contains("Suite ran in"), "{md}");
         assert!(dir.join("table1-time.png").exists());
+        assert!(dir.join("walk-visible.png").exists(), "{md}");
         let raw: serde_json::Value =
             serde_json::from_slice(&std::fs::read(dir.join("raw.json")).unwrap()).unwrap();
         let records = raw["records"].as_array().unwrap();
+        for r in raw["from_point"].as_array().unwrap() {
+            for c in r["cullers"].as_array().unwrap() {
+                assert_eq!(c["false_culls"].as_u64(), Some(0), "{r}");
+            }
+        }
+
         assert!(!records.is_empty());
         for r in records {
             if let Some(m) = r["missed"].as_u64() {

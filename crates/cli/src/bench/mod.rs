@@ -7,6 +7,7 @@
 //! cell and shared by all methods.
 
 mod experiments;
+mod from_point;
 mod indoor;
 mod machine;
 mod plots;

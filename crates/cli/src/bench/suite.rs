@@ -31,6 +31,19 @@ pub struct Suite {
     pub truth_resolution_px: Option<u32>,
     /// Source leaves per level checked against the ray oracle (indoor section).
     pub indoor_sources: usize,
+    /// From-point section: frames per scene, buffer size, every how many frames the
+    /// full-resolution reference and the item-buffer truth run, frames of the walk plot.
+    pub from_point_frames: usize,
+    pub from_point_size: (u32, u32),
+    pub from_point_full_every: usize,
+    pub from_point_truth_every: usize,
+    pub from_point_walk_frames: usize,
+    /// Scene files the from-point section adds when present and not given with
+    /// `--scene` (relative to the working directory: the repository's `data/`).
+    pub from_point_scenes: Vec<String>,
+    /// Run only these experiments (`bench --only`; names as in the report's footer,
+    /// case-insensitive); all when `None`.
+    pub only: Option<Vec<String>>,
 }
 
 impl Suite {
@@ -54,6 +67,13 @@ impl Suite {
                 truth_samples: None,
                 truth_resolution_px: None,
                 indoor_sources: 20,
+                from_point_frames: 40,
+                from_point_size: (1920, 1080),
+                from_point_full_every: 4,
+                from_point_truth_every: 4,
+                from_point_walk_frames: 60,
+                from_point_scenes: vec!["data/lyon1_bdtopo.geojson".into()],
+                only: None,
             }),
             "full" => Ok(Suite {
                 name: "full".into(),
@@ -73,6 +93,13 @@ impl Suite {
                 truth_samples: None,
                 truth_resolution_px: None,
                 indoor_sources: 60,
+                from_point_frames: 300,
+                from_point_size: (1920, 1080),
+                from_point_full_every: 5,
+                from_point_truth_every: 10,
+                from_point_walk_frames: 200,
+                from_point_scenes: vec!["data/lyon1_bdtopo.geojson".into()],
+                only: None,
             }),
             other => anyhow::bail!("unknown suite '{other}' (known: quick, full)"),
         }

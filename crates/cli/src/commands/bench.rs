@@ -15,11 +15,18 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         levels,
         indoor_only,
         out,
+        only,
     } = cmd
     else {
         unreachable!("dispatched by commands::run")
     };
-    let suite = Suite::named(&suite)?;
+    let mut suite = Suite::named(&suite)?;
+    suite.only = only.map(|o| {
+        o.split(',')
+            .map(|s| s.trim().to_string())
+            .filter(|s| !s.is_empty())
+            .collect()
+    });
     let methods = methods.map(|m| {
         m.split(',')
             .map(|s| s.trim().to_string())

@@ -2,12 +2,14 @@
 //! optional two-level culling inside the PVS of the eye's cell.
 
 use crate::cli::Command;
+use crate::cli::OccluderArg;
 use crate::common::{load_scene, print_json, progress};
 use anyhow::{bail, Context};
-use sightline_culling::walk::{street_walk, PathFrame};
+use sightline_culling::walk::{floor_frames, street_walk, PathFrame};
 use sightline_culling::{method, CullScene, Frustum};
 use sightline_geom::DVec3;
 use sightline_pvs::PvsFile;
+use sightline_scene::Geometry;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -47,6 +49,8 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         pvs,
         method: name,
         size,
+        occluders,
+        eye_height,
         json,
     } = cmd
     else {
@@ -68,11 +72,26 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
             if n == 0 || n > MAX_WALK {
                 bail!("--walk must be between 1 and {MAX_WALK}, got {n}");
             }
-            let w = street_walk(&sc, n, seed, 60.0);
-            if w.is_empty() {
-                bail!("no free street-level point found in the scene for --walk");
+            let has_blocks = sc
+                .objects
+                .iter()
+                .any(|o| matches!(o.geometry, Geometry::Blocks(_)));
+            if has_blocks {
+                let w = street_walk(&sc, n, seed, 60.0);
+                if w.is_empty() {
+                    bail!("no free street-level point found in the scene for --walk");
+                }
+                w
+            } else {
+                if !(eye_height.is_finite() && eye_height > 0.0) {
+                    bail!("--eye-height must be a positive number, got {eye_height}");
+                }
+                let w = floor_frames(&sc, n, seed, eye_height, 60.0);
+                if w.is_empty() {
+                    bail!("no floor (upward-facing mesh triangle) in the scene for --walk");
+                }
+                w
             }
-            w
         }
         (None, None) => bail!("give --path FILE or --walk N"),
     };
@@ -85,7 +104,30 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let cs = Arc::new(CullScene::new(&sc));
+    let has_meshes = sc
+        .objects
+        .iter()
+        .any(|o| matches!(o.geometry, Geometry::Mesh(_)));
+    let surfaces = match occluders {
+        OccluderArg::Auto => has_meshes,
+        OccluderArg::Prisms => false,
+        OccluderArg::Surfaces => true,
+    };
+    let cs = Arc::new(if surfaces {
+        CullScene::with_surfaces(&sc)
+    } else {
+        CullScene::new(&sc)
+    });
+    let occluder_desc = format!(
+        "{} prisms{}",
+        cs.occluders.len() - cs.surface_occluders,
+        if surfaces {
+            format!(" + {} mesh surfaces", cs.surface_occluders)
+        } else {
+            String::new()
+        }
+    );
+    let (cs_occluders, cs_surfaces) = (cs.occluders.len(), cs.surface_occluders);
     let culler = method(&name, cs)?;
     let bar = progress(frames.len() as u64, quiet, "frames");
     let mut out = Vec::with_capacity(frames.len());
@@ -150,6 +192,9 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
             "frames": out,
             "median_ms": median(ms_all.clone()),
             "median_culled_pct": median(culled_all.clone()),
+            "occluders": if surfaces { "surfaces" } else { "prisms" },
+            "occluder_count": cs_occluders,
+            "surface_occluders": cs_surfaces,
         });
         if pvs.is_some() {
             report["median_second_level_removed_pct"] = serde_json::json!(median(second_all));
@@ -157,7 +202,7 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         print_json(&report)
     } else {
         println!(
-            "{} frames, {} ({}), {width}x{height}: median {:.2} ms per frame, median {:.1} % of {} objects culled",
+            "{} frames, {} ({}), {width}x{height}, occluders {occluder_desc}: median {:.2} ms per frame, median {:.1} % of {} objects culled",
             n,
             culler.name(),
             if culler.is_conservative() { "conservative" } else { "approximate, NOT conservative" },
