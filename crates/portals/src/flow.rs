@@ -427,3 +427,44 @@ pub fn clip_to_separators(
     });
     t
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sightline_geom::DVec3;
+
+    fn square(x: f64) -> Winding {
+        Winding::new(vec![
+            DVec3::new(x, 0.0, 0.0),
+            DVec3::new(x, 1.0, 0.0),
+            DVec3::new(x, 1.0, 1.0),
+            DVec3::new(x, 0.0, 1.0),
+        ])
+    }
+
+    /// Cells along x: 3 = [-1, 0], 0 = [0, 1] ∪ [2, 3] (not convex), 1 = [1, 2],
+    /// 2 = [3, 4]. A line from 2 towards -x crosses 0, 1, 0 again, then 3. The flow
+    /// never enters a cell twice, yet it finds 3: the portals into and out of 0 are
+    /// adjacent in the graph, and every test of the flow holds for any subsequence of
+    /// the portals a line crosses, so cells need not be convex.
+    #[test]
+    fn a_line_back_into_a_cell_that_is_not_convex() {
+        let w: Vec<Winding> = (0..4).map(|k| square(k as f64)).collect();
+        let portals = [
+            (&w[0], Plane::new(DVec3::X, 0.0), [3, 0]),
+            (&w[1], Plane::new(DVec3::X, 1.0), [0, 1]),
+            (&w[2], Plane::new(DVec3::X, 2.0), [1, 0]),
+            (&w[3], Plane::new(DVec3::X, 3.0), [0, 2]),
+        ];
+        let g = Graph::from_portals(4, portals);
+        let flows = flow_all(&g, &might_see_all(&g));
+        for c in 0..4 {
+            let pvs = cell_pvs(&g, &flows, c);
+            assert!(
+                (0..4).all(|d| pvs.get(d)),
+                "{c}: {:?}",
+                pvs.ones().collect::<Vec<_>>()
+            );
+        }
+    }
+}
