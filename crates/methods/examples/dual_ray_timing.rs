@@ -37,9 +37,7 @@ fn thread_cpu_ns() -> Option<u64> {
 
 /// Peak resident memory of the process (kB), from `/proc/self/status`.
 fn peak_rss_kb() -> Option<u64> {
-    let s = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
-    line.split_whitespace().nth(1)?.parse().ok()
+    Some(sightline_stats::memory_kib().1).filter(|&kb| kb > 0)
 }
 
 /// Timings of a run over cells.

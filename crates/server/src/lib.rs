@@ -245,19 +245,6 @@ impl Server {
     }
 }
 
-/// Resident and peak memory of this process in KiB (`VmRSS`, `VmHWM` of
-/// `/proc/self/status`; zeros where unavailable). Read by `/api/stats` only: the path is
-/// fixed, never taken from a request.
-pub fn memory_kib() -> (u64, u64) {
-    let Ok(s) = std::fs::read_to_string("/proc/self/status") else {
-        return (0, 0);
-    };
-    let field = |name: &str| {
-        s.lines()
-            .find_map(|l| l.strip_prefix(name))
-            .and_then(|r| r.split_whitespace().next())
-            .and_then(|n| n.parse().ok())
-            .unwrap_or(0)
-    };
-    (field("VmRSS:"), field("VmHWM:"))
-}
+/// Resident and peak memory of this process in KiB, read by `/api/stats` only (the path
+/// is fixed, never taken from a request).
+pub use sightline_stats::memory_kib;

@@ -73,14 +73,7 @@ fn reset_peak() {
 }
 
 fn peak_mib() -> f64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("VmHWM:"))
-                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
-        })
-        .map_or(0.0, |kb| kb / 1024.0)
+    sightline_stats::memory_kib().1 as f64 / 1024.0
 }
 
 fn contains(big: &[u32], small: &[u32]) -> bool {

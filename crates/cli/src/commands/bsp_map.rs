@@ -160,18 +160,8 @@ pub(crate) fn plan_png(
             (HIDDEN_WALL, "wall culled"),
             (SOURCE, "source leaf and point"),
         ];
-        let (mut x, ly) = (20, y0 + 40);
-        for (c, label) in entries {
-            root.draw(&Rectangle::new([(x, ly), (x + 22, ly + 22)], c.filled()))
-                .context("drawing the map")?;
-            root.draw(&Text::new(
-                label.to_string(),
-                (x + 30, ly + 2),
-                font.clone(),
-            ))
-            .context("drawing the map")?;
-            x += 40 + 10 * label.len() as i32;
-        }
+        let ly = y0 + 40;
+        super::map::draw_legend(&root, &entries, ly, &font)?;
         root.draw(&Text::new(
             "top view; ceilings left out".to_string(),
             (20, ly + 40),

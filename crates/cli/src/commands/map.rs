@@ -261,19 +261,8 @@ fn render(
             // Grey at 35 % over the white background, as drawn.
             entries.push((RGBColor(230, 230, 230), "pale: ground surfaces"));
         }
-        let mut x = 20;
         let ly = y0 + 40;
-        for (c, label) in entries {
-            root.draw(&Rectangle::new([(x, ly), (x + 22, ly + 22)], c.filled()))
-                .context("drawing the map")?;
-            root.draw(&Text::new(
-                label.to_string(),
-                (x + 30, ly + 2),
-                font.clone(),
-            ))
-            .context("drawing the map")?;
-            x += 40 + 10 * label.len() as i32;
-        }
+        draw_legend(&root, &entries, ly, &font)?;
         // Scale bar: a round length of about a fifth of the width.
         let target_m = size.x.max(size.y) / 5.0;
         let step = 10f64.powf(target_m.log10().floor());
@@ -307,4 +296,25 @@ fn render(
     img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
         .context("encoding the PNG")?;
     Ok(png)
+}
+
+/// A legend row at height `y`: a filled square and a label per entry, left to right.
+pub(crate) fn draw_legend<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    entries: &[(RGBColor, &str)],
+    y: i32,
+    font: &FontDesc,
+) -> anyhow::Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let mut x = 20;
+    for &(c, label) in entries {
+        root.draw(&Rectangle::new([(x, y), (x + 22, y + 22)], c.filled()))
+            .context("drawing the map")?;
+        root.draw(&Text::new(label.to_string(), (x + 30, y + 2), font.clone()))
+            .context("drawing the map")?;
+        x += 40 + 10 * label.len() as i32;
+    }
+    Ok(())
 }
