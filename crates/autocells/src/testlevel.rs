@@ -50,8 +50,9 @@ pub fn lattice_level(
                             corner(1.0, 1.0),
                             corner(0.0, 1.0),
                         ];
-                        // (e_a × e_b) = e_axis: counter-clockwise seen from +axis.
-                        let q = if dir > 0 { q } else { [q[0], q[3], q[2], q[1]] };
+                        // `q` is counter-clockwise seen from +axis (e_a × e_b = e_axis);
+                        // the face must look into the free cell, towards -dir.
+                        let q = if dir < 0 { q } else { [q[0], q[3], q[2], q[1]] };
                         let m = match (axis, dir) {
                             (2, -1) => 0,
                             (2, 1) => 1,

@@ -291,9 +291,13 @@ pub fn voxelize(grid: Grid, tris: &[[DVec3; 3]], backface_tolerance: f64) -> Vox
             let stride = (boundary.len() / 64).max(1);
             let (mut front, mut back, mut front_voxel) = (0, 0, None);
             for &v in boundary.iter().step_by(stride) {
-                let o = voxels_ref.0.center(voxels_ref.0.coords(v as usize));
+                // Off-centre and tilted by odd amounts: rays through an edge or a
+                // vertex of the level's lattice would vote by a tie.
+                let o = voxels_ref.0.center(voxels_ref.0.coords(v as usize))
+                    + DVec3::new(0.0131, 0.0079, 0.0043) * voxels_ref.0.size;
                 for d in DIRECTIONS {
-                    match first_hit(voxels_ref, o, DVec3::from_array(d).normalize()) {
+                    let d = DVec3::from_array(d).normalize() + DVec3::new(0.0113, 0.0067, 0.0029);
+                    match first_hit(voxels_ref, o, d.normalize()) {
                         Some(true) => {
                             front += 1;
                             front_voxel.get_or_insert(v);
@@ -474,3 +478,4 @@ fn leak_path(grid: &Grid, label: &[u32], inside: usize) -> Leak {
         path: path.into_iter().map(at).collect(),
     }
 }
+
