@@ -59,7 +59,7 @@ impl Default for Options {
             smallest_hole: None,
             max_voxels: 1 << 24,
             backface_tolerance: 0.05,
-            max_box: 64,
+            max_box: 16,
             full: true,
         }
     }
@@ -293,4 +293,22 @@ impl AutoCells {
         }
         VoxelCell::new(c as u32, boxes).map(Cell::Voxels)
     }
+}
+
+/// Clusters hold at most this many triangles.
+pub const MAX_CLUSTER_TRIANGLES: usize = 2048;
+
+/// The cluster grid's side: 16 × the smallest hole the voxel budget allows for this
+/// scene (rooms-sized on a level, a few metres in a metric scene).
+pub fn default_cluster_size(scene: &Scene, opts: &Options) -> f64 {
+    let extent = scene.bounds.max - scene.bounds.min;
+    let mut h = opts.smallest_hole.unwrap_or(0.5);
+    if !(h.is_finite() && h > 0.0 && extent.is_finite()) {
+        return 4.0;
+    }
+    let dims = |h: f64| extent.to_array().map(|e| (e / h).ceil() as usize + 3);
+    while dims(h).iter().product::<usize>() > opts.max_voxels.max(27) {
+        h *= 1.05;
+    }
+    16.0 * h
 }

@@ -324,13 +324,18 @@ pub fn voxelize(grid: Grid, tris: &[[DVec3; 3]], backface_tolerance: f64) -> Vox
             }
         }
     }
-    // Apply: mark solid voxels.
+    // Apply: mark solid voxels, whole components, then single voxels that see only
+    // backs along the six axes.
     let solid_comp: Vec<bool> = votes
         .iter()
         .map(|&(f, b, _)| b > 0 && (f as f64) <= backface_tolerance * (f + b) as f64)
         .collect();
+    let behind = axis_votes(&grid, &state, &start, &tri_of, tris);
     for v in 0..n {
-        if state[v] == AIR && label[v] != u32::MAX && solid_comp[label[v] as usize] {
+        if state[v] == AIR
+            && label[v] != u32::MAX
+            && (solid_comp[label[v] as usize] || behind[v] >= 2)
+        {
             state[v] = SOLID;
         }
     }
@@ -479,3 +484,86 @@ fn leak_path(grid: &Grid, label: &[u32], inside: usize) -> Leak {
     }
 }
 
+
+/// Per untouched voxel, the number of axis directions (of six) whose first oriented
+/// surface voxel holds only triangles facing away (the voxel is behind them), or 0
+/// when some direction meets a front: a voxel of an open region (a wall whose top is
+/// the level's open sky) that sees the back of the geometry along every axis that
+/// meets any. A surface voxel whose triangles are all edge-on to the axis is passed
+/// through; one holding both orientations counts as a front.
+fn axis_votes(
+    grid: &Grid,
+    state: &[u8],
+    start: &[u32],
+    tri_of: &[u32],
+    tris: &[[DVec3; 3]],
+) -> Vec<u8> {
+    const FRONT: u8 = 0x80;
+    let n = grid.len();
+    // Bits 2k / 2k+1: a triangle with normal component k positive / negative.
+    let orient: Vec<u8> = (0..n)
+        .into_par_iter()
+        .map(|v| {
+            if state[v] != SURFACE {
+                return 0;
+            }
+            let mut bits = 0u8;
+            for &t in &tri_of[start[v] as usize..start[v + 1] as usize] {
+                let t = &tris[t as usize];
+                let nrm = (t[1] - t[0]).cross(t[2] - t[0]);
+                let len = nrm.length();
+                for k in 0..3 {
+                    if nrm[k] > 0.05 * len {
+                        bits |= 1 << (2 * k);
+                    } else if nrm[k] < -0.05 * len {
+                        bits |= 1 << (2 * k + 1);
+                    }
+                }
+            }
+            bits
+        })
+        .collect();
+    let mut votes = vec![0u8; n];
+    for k in 0..3 {
+        let (a, b) = ((k + 1) % 3, (k + 2) % 3);
+        let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]][k];
+        for j in 0..grid.dims[b] {
+            for i in 0..grid.dims[a] {
+                let mut c = [0; 3];
+                c[a] = i;
+                c[b] = j;
+                let first = grid.index(c[0], c[1], c[2]);
+                for forward in [true, false] {
+                    // `last`: what a ray from the current voxel towards decreasing
+                    // (forward pass) or increasing k meets first: 0 nothing, 1 back, 2 front.
+                    let mut last = 0u8;
+                    for step in 0..grid.dims[k] {
+                        let s = if forward { step } else { grid.dims[k] - 1 - step };
+                        let v = first + s * stride;
+                        if state[v] == SURFACE {
+                            let pos = orient[v] & (1 << (2 * k)) != 0;
+                            let neg = orient[v] & (1 << (2 * k + 1)) != 0;
+                            // Ray towards -k (forward pass) meets a front when n_k > 0.
+                            let (towards, away) = if forward { (pos, neg) } else { (neg, pos) };
+                            if towards {
+                                last = 2;
+                            } else if away {
+                                last = 1;
+                            }
+                        } else if state[v] == AIR {
+                            match last {
+                                2 => votes[v] |= FRONT,
+                                1 => votes[v] += 1,
+                                _ => {}
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    votes
+        .into_iter()
+        .map(|x| if x & FRONT != 0 { 0 } else { x })
+        .collect()
+}
