@@ -1,7 +1,7 @@
 //! Automatic cells on a mesh level end to end, with the figures of issue #39:
 //! `cargo run --release -p sightline-autocells --example auto_levels -- LEVEL.obj [H] [K]`
 //! (H: smallest hole, default the automatic one; K: cells judged against the truth,
-//! default 20).
+//! default 20; `fast`: the base flood only, `portals-fast`).
 
 use sightline_autocells::{AutoCells, Options};
 use sightline_core::check::{TruthOptions, TruthScene};
@@ -24,7 +24,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let path = args
         .get(1)
-        .ok_or("usage: auto_levels LEVEL.obj [SMALLEST_HOLE] [CELLS]")?;
+        .ok_or("usage: auto_levels LEVEL.obj [SMALLEST_HOLE|auto] [CELLS] [full|fast] [MAX_BOX]")?;
     let hole = args
         .get(2)
         .filter(|s| *s != "auto")
@@ -37,12 +37,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let t1 = Instant::now();
     let opts = Options {
         smallest_hole: hole,
+        full: args.get(4).is_none_or(|m| m != "fast"),
+        max_box: match args.get(5) {
+            Some(b) => b.parse()?,
+            None => Options::default().max_box,
+        },
         ..Options::default()
     };
     let cluster_size = sightline_autocells::default_cluster_size(&scene, &opts);
     let clustered = cluster_scene(&scene, cluster_size, sightline_autocells::MAX_CLUSTER_TRIANGLES);
     let t_clusters = t1.elapsed().as_secs_f64();
-    let auto = AutoCells::build(&clustered.scene, &opts)?;
+    let mut auto = AutoCells::cut(&clustered.scene, &opts)?;
+    let r = auto.report.clone();
+    println!(
+        "cut      {} cells, {} portals, {} solid voxels ({:.2} s)",
+        r.cells,
+        r.portals,
+        r.voxels.solid,
+        t1.elapsed().as_secs_f64()
+    );
+    auto.solve(opts.full);
     let total = t1.elapsed().as_secs_f64();
     let r = &auto.report;
     println!(

@@ -118,6 +118,14 @@ impl AutoCells {
     /// Voxelize `scene`, cut its free space into cells and portals, and solve every
     /// cell. Objects of `scene` are the clusters the PVS lists.
     pub fn build(scene: &Scene, opts: &Options) -> Result<AutoCells, AutoError> {
+        let mut auto = AutoCells::cut(scene, opts)?;
+        auto.solve(opts.full);
+        Ok(auto)
+    }
+
+    /// The cells and portals without their PVS (every cell sees every cell until
+    /// [`AutoCells::solve`]).
+    pub fn cut(scene: &Scene, opts: &Options) -> Result<AutoCells, AutoError> {
         let t0 = Instant::now();
         let mut tris = Vec::new();
         let mut tri_object = Vec::new();
@@ -166,32 +174,6 @@ impl AutoCells {
             return Err(AutoError::NoFreeSpace);
         }
         let portals = portals(&voxels, &boxes, &owner);
-        let seconds_cells = t1.elapsed().as_secs_f64();
-        let t2 = Instant::now();
-        let graph = Graph::from_portals(
-            boxes.len(),
-            portals.iter().map(|p| (&p.winding, p.plane, p.cells)),
-        );
-        let mightsee = might_see_all(&graph);
-        let sets = if opts.full {
-            flow_all(&graph, &mightsee)
-        } else {
-            mightsee
-        };
-        let cell_pvs: Vec<Bits> = (0..boxes.len())
-            .into_par_iter()
-            .map(|c| {
-                let mut seen = Bits::new(boxes.len());
-                seen.set(c);
-                for &p in &graph.leaf_portals[c] {
-                    seen.set(graph.portals[p as usize].to as usize);
-                    for q in sets[p as usize].ones() {
-                        seen.set(graph.portals[q].to as usize);
-                    }
-                }
-                seen
-            })
-            .collect();
         let mut cell_clusters = vec![Vec::new(); boxes.len()];
         for (v, &s) in voxels.state.iter().enumerate() {
             if s == SURFACE && owner[v] != u32::MAX {
@@ -203,17 +185,21 @@ impl AutoCells {
             l.sort_unstable();
             l.dedup();
         }
+        let seconds_cells = t1.elapsed().as_secs_f64();
+        let n = boxes.len();
+        let mut all = Bits::new(n);
+        (0..n).for_each(|c| all.set(c));
         let report = Report {
             smallest_hole: h,
             smallest_hole_asked: (h != asked).then_some(asked),
             grid: voxels.grid.dims,
             voxels: voxels.stats.clone(),
-            cells: boxes.len(),
+            cells: n,
             portals: portals.len(),
             clusters: scene.objects.len(),
             seconds_voxels,
             seconds_cells,
-            seconds_pvs: t2.elapsed().as_secs_f64(),
+            seconds_pvs: 0.0,
             leak: voxels.leak.clone(),
         };
         Ok(AutoCells {
@@ -221,11 +207,43 @@ impl AutoCells {
             boxes,
             owner,
             portals,
-            cell_pvs,
+            cell_pvs: vec![all; n],
             cell_clusters,
             objects: scene.objects.len(),
             report,
         })
+    }
+
+    /// The cell PVS of every cell: the flow through portal sequences (`full`) or the
+    /// base flood.
+    pub fn solve(&mut self, full: bool) {
+        let t2 = Instant::now();
+        let n = self.boxes.len();
+        let graph = Graph::from_portals(
+            n,
+            self.portals.iter().map(|p| (&p.winding, p.plane, p.cells)),
+        );
+        let mightsee = might_see_all(&graph);
+        let sets = if full {
+            flow_all(&graph, &mightsee)
+        } else {
+            mightsee
+        };
+        self.cell_pvs = (0..n)
+            .into_par_iter()
+            .map(|c| {
+                let mut seen = Bits::new(n);
+                seen.set(c);
+                for &p in &graph.leaf_portals[c] {
+                    seen.set(graph.portals[p as usize].to as usize);
+                    for q in sets[p as usize].ones() {
+                        seen.set(graph.portals[q].to as usize);
+                    }
+                }
+                seen
+            })
+            .collect();
+        self.report.seconds_pvs = t2.elapsed().as_secs_f64();
     }
 
     /// Number of cells.

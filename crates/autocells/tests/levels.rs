@@ -77,3 +77,42 @@ fn thin_wall_does_not_occlude() {
     assert!(from_w.contains(&id(&scene, "crate-e")));
     no_misses(&scene, &auto);
 }
+
+#[test]
+fn bad_input_is_an_error_or_a_counted_warning() {
+    use sightline_autocells::AutoError;
+    use sightline_geom::DVec3;
+    use sightline_scene::{Mesh, Object};
+    let empty = Scene::from_objects(vec![]);
+    assert!(matches!(
+        AutoCells::build(&empty, &opts(0.5)),
+        Err(AutoError::NoTriangles)
+    ));
+    let level = testlevel::two_rooms_and_a_door(0.0);
+    assert!(matches!(
+        AutoCells::build(&level, &opts(100.0)),
+        Err(AutoError::HoleTooLarge { .. })
+    ));
+    for h in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        assert!(matches!(
+            AutoCells::build(&level, &opts(h)),
+            Err(AutoError::BadHole(_))
+        ));
+    }
+    // Degenerate and huge triangles, an open mesh: counted, no panic.
+    let mut objects = level.objects.clone();
+    let m = Mesh {
+        vertices: vec![
+            DVec3::new(0.0, 0.0, 1.0),
+            DVec3::new(1.0, 1.0, 1.0),
+            DVec3::new(2.0, 2.0, 1.0),
+            DVec3::new(-1e4, -1e4, 1.7),
+            DVec3::new(1e4, -1e4, 2.3),
+        ],
+        triangles: vec![[0, 1, 2], [0, 0, 0], [3, 4, 1]],
+    };
+    objects.push(Object::mesh(Some("junk".into()), m, vec![], vec![]));
+    let auto = AutoCells::build(&Scene::from_objects(objects), &opts(0.5)).expect("builds");
+    assert_eq!(auto.report.voxels.degenerate_triangles, 2);
+    assert!(auto.report.smallest_hole > 0.5, "raised to fit the voxel budget");
+}
