@@ -24,7 +24,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let path = args
         .get(1)
-        .ok_or("usage: auto_levels LEVEL.obj [SMALLEST_HOLE|auto] [CELLS] [full|fast] [MAX_BOX]")?;
+        .ok_or("usage: auto_levels LEVEL.obj [SMALLEST_HOLE|auto] [CELLS] [full|fast] [MAX_BOX] [GROUP_BLOCK]")?;
     let hole = args
         .get(2)
         .filter(|s| *s != "auto")
@@ -42,6 +42,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             Some(b) => b.parse()?,
             None => Options::default().max_box,
         },
+        group_block: match args.get(6) {
+            Some(b) => b.parse()?,
+            None => Options::default().group_block,
+        },
         ..Options::default()
     };
     let cluster_size = sightline_autocells::default_cluster_size(&scene, &opts);
@@ -56,7 +60,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         r.voxels.solid,
         t1.elapsed().as_secs_f64()
     );
-    auto.solve(opts.full);
+    auto.solve(opts.full, opts.group_block);
     let total = t1.elapsed().as_secs_f64();
     let r = &auto.report;
     println!(
@@ -86,7 +90,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         r.seconds_voxels
     );
     println!("cells    {} cells, {} portals ({:.2} s)", r.cells, r.portals, r.seconds_cells);
-    println!("pvs      every cell in {:.2} s", r.seconds_pvs);
+    println!(
+        "pvs      every cell in {:.2} s ({} solver cells, {} portals)",
+        r.seconds_pvs, r.groups, r.group_portals
+    );
     if let Some(l) = &r.leak {
         println!("leak     from {:?} to the border at {:?} ({} voxels)", l.inside, l.border, l.path.len());
     }

@@ -147,3 +147,43 @@ pub fn portals(v: &Voxels, boxes: &[VoxelBox], owner: &[u32]) -> Vec<Portal> {
     }
     out
 }
+
+/// Group boxes into coarser cells for the solver: boxes whose lower corners lie in the
+/// same block of `block` voxels a side and that are connected through portals inside
+/// it form one cell (a union of boxes, not convex: the flow then assumes a line can
+/// cross it from any portal to any other in front, which only adds visibility). Boxes
+/// on two sides of a wall stay apart unless open space joins them within the block.
+/// Returns each box's group and the number of groups.
+pub fn group_boxes(boxes: &[VoxelBox], portals: &[Portal], block: usize) -> (Vec<u32>, usize) {
+    let block = block.max(1);
+    let key = |b: &VoxelBox| b.lo.map(|x| x / block);
+    let mut parent: Vec<u32> = (0..boxes.len() as u32).collect();
+    fn find(parent: &mut [u32], mut x: u32) -> u32 {
+        while parent[x as usize] != x {
+            parent[x as usize] = parent[parent[x as usize] as usize];
+            x = parent[x as usize];
+        }
+        x
+    }
+    for p in portals {
+        let [a, b] = p.cells;
+        if key(&boxes[a as usize]) == key(&boxes[b as usize]) {
+            let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+            if ra != rb {
+                parent[ra.max(rb) as usize] = ra.min(rb);
+            }
+        }
+    }
+    let mut id = vec![u32::MAX; boxes.len()];
+    let mut group = vec![0u32; boxes.len()];
+    let mut n = 0u32;
+    for b in 0..boxes.len() as u32 {
+        let r = find(&mut parent, b) as usize;
+        if id[r] == u32::MAX {
+            id[r] = n;
+            n += 1;
+        }
+        group[b as usize] = id[r];
+    }
+    (group, n as usize)
+}

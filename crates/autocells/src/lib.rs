@@ -51,6 +51,9 @@ pub struct Options {
     /// `true`: the flow through portal sequences (`portals`); `false`: the base flood
     /// only (`portals-fast`).
     pub full: bool,
+    /// The solver's cells: boxes connected within blocks of this many voxels a side
+    /// ([`cells::group_boxes`]); 0 or 1: every box its own cell.
+    pub group_block: usize,
 }
 
 impl Default for Options {
@@ -59,8 +62,9 @@ impl Default for Options {
             smallest_hole: None,
             max_voxels: 1 << 24,
             backface_tolerance: 0.05,
-            max_box: 16,
+            max_box: 64,
             full: true,
+            group_block: 32,
         }
     }
 }
@@ -92,6 +96,9 @@ pub struct Report {
     pub voxels: VoxelStats,
     pub cells: usize,
     pub portals: usize,
+    /// The solver's cells (groups of boxes) and the portals between them.
+    pub groups: usize,
+    pub group_portals: usize,
     pub clusters: usize,
     pub seconds_voxels: f64,
     pub seconds_cells: f64,
@@ -119,7 +126,7 @@ impl AutoCells {
     /// cell. Objects of `scene` are the clusters the PVS lists.
     pub fn build(scene: &Scene, opts: &Options) -> Result<AutoCells, AutoError> {
         let mut auto = AutoCells::cut(scene, opts)?;
-        auto.solve(opts.full);
+        auto.solve(opts.full, opts.group_block);
         Ok(auto)
     }
 
@@ -196,6 +203,8 @@ impl AutoCells {
             voxels: voxels.stats.clone(),
             cells: n,
             portals: portals.len(),
+            groups: n,
+            group_portals: portals.len(),
             clusters: scene.objects.len(),
             seconds_voxels,
             seconds_cells,
@@ -215,13 +224,22 @@ impl AutoCells {
     }
 
     /// The cell PVS of every cell: the flow through portal sequences (`full`) or the
-    /// base flood.
-    pub fn solve(&mut self, full: bool) {
+    /// base flood, on the boxes grouped by [`cells::group_boxes`] (`group_block`); a box
+    /// sees every box of every group its group sees.
+    pub fn solve(&mut self, full: bool, group_block: usize) {
         let t2 = Instant::now();
         let n = self.boxes.len();
+        let (group, groups) = if group_block > 1 {
+            cells::group_boxes(&self.boxes, &self.portals, group_block)
+        } else {
+            ((0..n as u32).collect(), n)
+        };
         let graph = Graph::from_portals(
-            n,
-            self.portals.iter().map(|p| (&p.winding, p.plane, p.cells)),
+            groups,
+            self.portals.iter().filter_map(|p| {
+                let [a, b] = p.cells.map(|c| group[c as usize]);
+                (a != b).then_some((&p.winding, p.plane, [a, b]))
+            }),
         );
         let mightsee = might_see_all(&graph);
         let sets = if full {
@@ -229,10 +247,10 @@ impl AutoCells {
         } else {
             mightsee
         };
-        self.cell_pvs = (0..n)
+        let group_pvs: Vec<Bits> = (0..groups)
             .into_par_iter()
             .map(|c| {
-                let mut seen = Bits::new(n);
+                let mut seen = Bits::new(groups);
                 seen.set(c);
                 for &p in &graph.leaf_portals[c] {
                     seen.set(graph.portals[p as usize].to as usize);
@@ -243,6 +261,21 @@ impl AutoCells {
                 seen
             })
             .collect();
+        self.cell_pvs = (0..n)
+            .into_par_iter()
+            .map(|b| {
+                let g = &group_pvs[group[b] as usize];
+                let mut seen = Bits::new(n);
+                for (other, &og) in group.iter().enumerate() {
+                    if g.get(og as usize) {
+                        seen.set(other);
+                    }
+                }
+                seen
+            })
+            .collect();
+        self.report.groups = groups;
+        self.report.group_portals = graph.portals.len() / 2;
         self.report.seconds_pvs = t2.elapsed().as_secs_f64();
     }
 
@@ -289,9 +322,10 @@ impl AutoCells {
         Ok(self.pvs(c as usize))
     }
 
-    /// The free space of cell `c` for judging: its voxels that are not surface (a
-    /// surface voxel may hold points inside closed geometry, which are no viewpoints),
-    /// as a voxel cell; `None` when it has none.
+    /// The free space of cell `c` for judging: its air voxels that meet the front of a
+    /// triangle along some axis (a surface voxel may hold points inside walls, and air
+    /// in the void around the level sees only backs: neither is a viewpoint), as a
+    /// voxel cell; `None` when it has none.
     pub fn free_region(&self, c: usize) -> Option<Cell> {
         let b = &self.boxes[c];
         let g = &self.voxels.grid;
@@ -299,7 +333,8 @@ impl AutoCells {
         for z in b.lo[2]..b.hi[2] {
             for y in b.lo[1]..b.hi[1] {
                 for x in b.lo[0]..b.hi[0] {
-                    if self.voxels.state[g.index(x, y, z)] == voxels::AIR {
+                    let v = g.index(x, y, z);
+                    if self.voxels.state[v] == voxels::AIR && self.voxels.sees_front[v] {
                         let min = g.voxel_min([x, y, z]);
                         boxes.push(ViewCell {
                             min,

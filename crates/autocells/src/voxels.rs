@@ -130,6 +130,10 @@ pub struct Voxels {
     pub tri_of: Vec<u32>,
     pub stats: VoxelStats,
     pub leak: Option<Leak>,
+    /// Air voxels that meet the front of a triangle along some axis: the viewpoints of
+    /// the level (voxels in the void around it, which meet only backs or nothing, are
+    /// not).
+    pub sees_front: Vec<bool>,
 }
 
 impl Voxels {
@@ -330,11 +334,13 @@ pub fn voxelize(grid: Grid, tris: &[[DVec3; 3]], backface_tolerance: f64) -> Vox
         .iter()
         .map(|&(f, b, _)| b > 0 && (f as f64) <= backface_tolerance * (f + b) as f64)
         .collect();
-    let behind = axis_votes(&grid, &state, &start, &tri_of, tris);
+    let votes = axis_votes(&grid, &state, &start, &tri_of, tris);
+    let sees_front: Vec<bool> = votes.iter().map(|&x| x & AXIS_FRONT != 0).collect();
     for v in 0..n {
+        let behind = if sees_front[v] { 0 } else { votes[v] };
         if state[v] == AIR
             && label[v] != u32::MAX
-            && (solid_comp[label[v] as usize] || behind[v] >= 2)
+            && (solid_comp[label[v] as usize] || behind >= 2)
         {
             state[v] = SOLID;
         }
@@ -353,6 +359,7 @@ pub fn voxelize(grid: Grid, tris: &[[DVec3; 3]], backface_tolerance: f64) -> Vox
         tri_of,
         stats,
         leak,
+        sees_front,
     }
 }
 
@@ -486,8 +493,8 @@ fn leak_path(grid: &Grid, label: &[u32], inside: usize) -> Leak {
 
 
 /// Per untouched voxel, the number of axis directions (of six) whose first oriented
-/// surface voxel holds only triangles facing away (the voxel is behind them), or 0
-/// when some direction meets a front: a voxel of an open region (a wall whose top is
+/// surface voxel holds only triangles facing away (the voxel is behind them), and
+/// [`AXIS_FRONT`] when some direction meets a front. Rule 2 makes solid a voxel of an open region (a wall whose top is
 /// the level's open sky) that sees the back of the geometry along every axis that
 /// meets any. A surface voxel whose triangles are all edge-on to the axis is passed
 /// through; one holding both orientations counts as a front.
@@ -498,7 +505,7 @@ fn axis_votes(
     tri_of: &[u32],
     tris: &[[DVec3; 3]],
 ) -> Vec<u8> {
-    const FRONT: u8 = 0x80;
+    const FRONT: u8 = AXIS_FRONT;
     let n = grid.len();
     // Bits 2k / 2k+1: a triangle with normal component k positive / negative.
     let orient: Vec<u8> = (0..n)
@@ -563,7 +570,7 @@ fn axis_votes(
         }
     }
     votes
-        .into_iter()
-        .map(|x| if x & FRONT != 0 { 0 } else { x })
-        .collect()
 }
+
+/// Flag of [`axis_votes`]: some axis direction meets a front.
+const AXIS_FRONT: u8 = 0x80;
