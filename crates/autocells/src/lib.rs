@@ -118,6 +118,8 @@ pub struct AutoCells {
     /// Clusters (scene objects) touching each cell's voxels, sorted.
     pub cell_clusters: Vec<Vec<u32>>,
     pub objects: usize,
+    /// The scene's bounding box: viewpoints and targets lie in it.
+    pub bounds: ViewCell,
     pub report: Report,
 }
 
@@ -219,6 +221,7 @@ impl AutoCells {
             cell_pvs: vec![all; n],
             cell_clusters,
             objects: scene.objects.len(),
+            bounds: ViewCell { min: b.min, max: b.max },
             report,
         })
     }
@@ -324,8 +327,8 @@ impl AutoCells {
 
     /// The free space of cell `c` for judging: its air voxels that meet the front of a
     /// triangle along some axis (a surface voxel may hold points inside walls, and air
-    /// in the void around the level sees only backs: neither is a viewpoint), as a
-    /// voxel cell; `None` when it has none.
+    /// in the void around the level sees only backs: neither is a viewpoint), clipped
+    /// to the scene's bounding box, as a voxel cell; `None` when it has none.
     pub fn free_region(&self, c: usize) -> Option<Cell> {
         let b = &self.boxes[c];
         let g = &self.voxels.grid;
@@ -335,11 +338,12 @@ impl AutoCells {
                 for x in b.lo[0]..b.hi[0] {
                     let v = g.index(x, y, z);
                     if self.voxels.state[v] == voxels::AIR && self.voxels.sees_front[v] {
-                        let min = g.voxel_min([x, y, z]);
-                        boxes.push(ViewCell {
-                            min,
-                            max: min + DVec3::splat(g.size),
-                        });
+                        let min = g.voxel_min([x, y, z]).max(self.bounds.min);
+                        let max = (g.voxel_min([x, y, z]) + DVec3::splat(g.size))
+                            .min(self.bounds.max);
+                        if (0..3).all(|k| min[k] < max[k]) {
+                            boxes.push(ViewCell { min, max });
+                        }
                     }
                 }
             }
