@@ -16,7 +16,7 @@
 //! ```
 //! use sightline_autocells::{testlevel, AutoCells, Options};
 //! let scene = testlevel::two_rooms_and_a_door(0.0);
-//! let auto = AutoCells::build(&scene, &Options { smallest_hole: Some(0.5), ..Options::default() }).unwrap();
+//! let auto = AutoCells::build(&scene, &Options { smallest_hole: Some(0.45), ..Options::default() }).unwrap();
 //! let pvs = auto.pvs_at([-4.0, 0.0, 1.5]).unwrap();
 //! assert!(!pvs.is_empty() && pvs.len() < scene.objects.len());
 //! ```
@@ -164,14 +164,15 @@ impl AutoCells {
             });
         }
         let mut h = asked;
-        let dims_for = |h: f64| extent.to_array().map(|e| (e / h).ceil() as usize + 3);
+        let dims_for = |h: f64| extent.to_array().map(|e| (e / h).ceil() as usize + 2);
         while dims_for(h).iter().product::<usize>() > opts.max_voxels.max(27) {
             h *= 1.05;
         }
-        // One voxel of padding, the grid shifted by half a voxel: the border layer is
-        // outside every triangle.
+        // One voxel of padding: the border layer lies outside the bounding box (rule 3
+        // makes it solid) and the box's faces fall on voxel faces, so a wall that ends
+        // at the box holds solid voxels up to it.
         let grid = Grid {
-            origin: b.min - DVec3::splat(1.5 * h),
+            origin: b.min - DVec3::splat(h),
             size: h,
             dims: dims_for(h),
         };
@@ -363,7 +364,7 @@ pub fn default_cluster_size(scene: &Scene, opts: &Options) -> f64 {
     if !(h.is_finite() && h > 0.0 && extent.is_finite()) {
         return 4.0;
     }
-    let dims = |h: f64| extent.to_array().map(|e| (e / h).ceil() as usize + 3);
+    let dims = |h: f64| extent.to_array().map(|e| (e / h).ceil() as usize + 2);
     while dims(h).iter().product::<usize>() > opts.max_voxels.max(27) {
         h *= 1.05;
     }

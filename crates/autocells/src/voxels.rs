@@ -345,12 +345,12 @@ pub fn voxelize(grid: Grid, tris: &[[DVec3; 3]], backface_tolerance: f64) -> Vox
             state[v] = SOLID;
         }
     }
-    // The grid's border layer lies wholly outside the scene's bounding box, which is
-    // convex: a segment between a viewpoint and a triangle, both inside it, never
-    // reaches the layer. Closing it is exact, and it keeps the void around a level
+    // The grid's border layer lies outside the scene's bounding box (touching it at
+    // most), which is convex: a segment between a viewpoint and a triangle, both
+    // inside it, never enters the layer. Closing it is exact, and it keeps the void around a level
     // open to the sky from joining every courtyard to every other.
     for v in 0..n {
-        if state[v] == AIR && grid.on_border(grid.coords(v)) {
+        if state[v] != SOLID && grid.on_border(grid.coords(v)) {
             state[v] = SOLID;
         }
     }

@@ -52,7 +52,7 @@ fn no_misses(scene: &Scene, auto: &AutoCells) {
 fn two_rooms_and_a_door() {
     for offset in [0.0, 1.0e5] {
         let scene = testlevel::two_rooms_and_a_door(offset);
-        let auto = AutoCells::build(&scene, &opts(0.5)).expect("builds");
+        let auto = AutoCells::build(&scene, &opts(0.45)).expect("builds");
         let r = &auto.report;
         assert!(r.voxels.solid > 0, "{r:?}");
         assert!(r.leak.is_none(), "{:?}", r.leak);
@@ -72,7 +72,7 @@ fn two_rooms_and_a_door() {
 #[test]
 fn thin_wall_does_not_occlude() {
     let scene = testlevel::thin_wall();
-    let auto = AutoCells::build(&scene, &opts(0.5)).expect("builds");
+    let auto = AutoCells::build(&scene, &opts(0.45)).expect("builds");
     let from_w = auto.pvs_at([-2.0, 0.0, 1.0]).expect("free");
     assert!(from_w.contains(&id(&scene, "crate-e")));
     no_misses(&scene, &auto);
@@ -112,7 +112,7 @@ fn bad_input_is_an_error_or_a_counted_warning() {
         triangles: vec![[0, 1, 2], [0, 0, 0], [3, 4, 1]],
     };
     objects.push(Object::mesh(Some("junk".into()), m, vec![], vec![]));
-    let auto = AutoCells::build(&Scene::from_objects(objects), &opts(0.5)).expect("builds");
+    let auto = AutoCells::build(&Scene::from_objects(objects), &opts(0.45)).expect("builds");
     assert_eq!(auto.report.voxels.degenerate_triangles, 2);
-    assert!(auto.report.smallest_hole > 0.5, "raised to fit the voxel budget");
+    assert!(auto.report.smallest_hole > 0.45, "raised to fit the voxel budget");
 }
