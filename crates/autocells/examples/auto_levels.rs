@@ -49,7 +49,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..Options::default()
     };
     let cluster_size = sightline_autocells::default_cluster_size(&scene, &opts);
-    let clustered = cluster_scene(&scene, cluster_size, sightline_autocells::MAX_CLUSTER_TRIANGLES);
+    let clustered = cluster_scene(
+        &scene,
+        cluster_size,
+        sightline_autocells::MAX_CLUSTER_TRIANGLES,
+    );
     let t_clusters = t1.elapsed().as_secs_f64();
     let mut auto = AutoCells::cut(&clustered.scene, &opts)?;
     let r = auto.report.clone();
@@ -66,7 +70,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!(
         "level    {path}: {} objects, {} triangles, bounds {:?} – {:?}",
         scene.objects.len(),
-        scene.objects.iter().map(|o| o.triangle_count()).sum::<usize>(),
+        scene
+            .objects
+            .iter()
+            .map(|o| o.triangle_count())
+            .sum::<usize>(),
         scene.bounds.min.to_array(),
         scene.bounds.max.to_array()
     );
@@ -89,13 +97,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         r.voxels.degenerate_triangles,
         r.seconds_voxels
     );
-    println!("cells    {} cells, {} portals ({:.2} s)", r.cells, r.portals, r.seconds_cells);
+    println!(
+        "cells    {} cells, {} portals ({:.2} s)",
+        r.cells, r.portals, r.seconds_cells
+    );
     println!(
         "pvs      every cell in {:.2} s ({} solver cells, {} portals)",
         r.seconds_pvs, r.groups, r.group_portals
     );
     if let Some(l) = &r.leak {
-        println!("leak     from {:?} to the border at {:?} ({} voxels)", l.inside, l.border, l.path.len());
+        println!(
+            "leak     from {:?} to the border at {:?} ({} voxels)",
+            l.inside,
+            l.border,
+            l.path.len()
+        );
     }
     let mut culled: Vec<f64> = (0..auto.len())
         .map(|c| 1.0 - auto.pvs(c).len() as f64 / auto.objects as f64)
@@ -145,6 +161,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .collect();
         if !m.is_empty() {
             println!("MISS     cell {c} {:?}: {m:?}", auto.cell_box(c));
+            for w in t.witnesses.iter().filter(|w| m.contains(&w.id)) {
+                let o = sightline_geom::DVec3::from_array(w.viewpoint);
+                let d = sightline_geom::DVec3::from_array(w.direction);
+                // Voxel states along the witness ray, every half voxel, up to 64 voxels.
+                let g = &auto.voxels.grid;
+                let states: String = (0..128)
+                    .filter_map(|i| g.locate(o + d * (i as f64 * 0.5 * g.size)))
+                    .map(|c| match auto.voxels.state[g.index(c[0], c[1], c[2])] {
+                        0 => 'a',
+                        1 => 's',
+                        _ => '#',
+                    })
+                    .collect();
+                println!(
+                    "witness  {} from {:?} along {:?} (cell {:?}): {states}",
+                    w.id,
+                    w.viewpoint,
+                    w.direction,
+                    auto.locate(w.viewpoint)
+                );
+            }
         }
         missed += m.len();
         seen += t.visible.len();

@@ -188,7 +188,12 @@ impl AutoCells {
         for (v, &s) in voxels.state.iter().enumerate() {
             if s == SURFACE && owner[v] != u32::MAX {
                 let list = &mut cell_clusters[owner[v] as usize];
-                list.extend(voxels.triangles_in(v).iter().map(|&t| tri_object[t as usize]));
+                list.extend(
+                    voxels
+                        .triangles_in(v)
+                        .iter()
+                        .map(|&t| tri_object[t as usize]),
+                );
             }
         }
         for l in &mut cell_clusters {
@@ -222,7 +227,10 @@ impl AutoCells {
             cell_pvs: vec![all; n],
             cell_clusters,
             objects: scene.objects.len(),
-            bounds: ViewCell { min: b.min, max: b.max },
+            bounds: ViewCell {
+                min: b.min,
+                max: b.max,
+            },
             report,
         })
     }
@@ -340,8 +348,8 @@ impl AutoCells {
                     let v = g.index(x, y, z);
                     if self.voxels.state[v] == voxels::AIR && self.voxels.sees_front[v] {
                         let min = g.voxel_min([x, y, z]).max(self.bounds.min);
-                        let max = (g.voxel_min([x, y, z]) + DVec3::splat(g.size))
-                            .min(self.bounds.max);
+                        let max =
+                            (g.voxel_min([x, y, z]) + DVec3::splat(g.size)).min(self.bounds.max);
                         if (0..3).all(|k| min[k] < max[k]) {
                             boxes.push(ViewCell { min, max });
                         }

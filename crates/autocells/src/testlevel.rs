@@ -102,7 +102,11 @@ pub fn closed_box(lo: DVec3, hi: DVec3) -> Mesh {
                 p
             };
             let q = [corner(0, 0), corner(1, 0), corner(1, 1), corner(0, 1)];
-            let q = if side == 1 { q } else { [q[0], q[3], q[2], q[1]] };
+            let q = if side == 1 {
+                q
+            } else {
+                [q[0], q[3], q[2], q[1]]
+            };
             push_quad(&mut m, q);
         }
     }
@@ -142,7 +146,11 @@ pub fn two_rooms_and_a_door(offset: f64) -> Scene {
         [24, 18, 7],
         origin,
         free,
-        &[("crate-a", a0, a1), ("crate-b", b0, b1), ("crate-d", d0, d1)],
+        &[
+            ("crate-a", a0, a1),
+            ("crate-b", b0, b1),
+            ("crate-d", d0, d1),
+        ],
     )
 }
 
@@ -157,8 +165,16 @@ pub fn thin_wall() -> Scene {
         origin,
         |_, _, _| true,
         &[
-            ("crate-w", DVec3::new(0.5, 1.5, 0.0), DVec3::new(1.0, 2.0, 0.5)),
-            ("crate-e", DVec3::new(7.0, 1.5, 0.0), DVec3::new(7.5, 2.0, 0.5)),
+            (
+                "crate-w",
+                DVec3::new(0.5, 1.5, 0.0),
+                DVec3::new(1.0, 2.0, 0.5),
+            ),
+            (
+                "crate-e",
+                DVec3::new(7.0, 1.5, 0.0),
+                DVec3::new(7.5, 2.0, 0.5),
+            ),
         ],
     );
     scene.objects.push(Object::mesh(

@@ -254,7 +254,13 @@ pub fn voxelize(grid: Grid, tris: &[[DVec3; 3]], backface_tolerance: f64) -> Vox
     let tri_of: Vec<u32> = pairs.iter().map(|&(_, t)| t).collect();
     drop(pairs);
     let mut state: Vec<u8> = (0..n)
-        .map(|v| if start[v + 1] > start[v] { SURFACE } else { AIR })
+        .map(|v| {
+            if start[v + 1] > start[v] {
+                SURFACE
+            } else {
+                AIR
+            }
+        })
         .collect();
 
     // Components of untouched voxels.
@@ -338,9 +344,7 @@ pub fn voxelize(grid: Grid, tris: &[[DVec3; 3]], backface_tolerance: f64) -> Vox
     let sees_front: Vec<bool> = votes.iter().map(|&x| x & AXIS_FRONT != 0).collect();
     for v in 0..n {
         let behind = if sees_front[v] { 0 } else { votes[v] };
-        if state[v] == AIR
-            && label[v] != u32::MAX
-            && (solid_comp[label[v] as usize] || behind >= 2)
+        if state[v] == AIR && label[v] != u32::MAX && (solid_comp[label[v] as usize] || behind >= 2)
         {
             state[v] = SOLID;
         }
@@ -500,7 +504,6 @@ fn leak_path(grid: &Grid, label: &[u32], inside: usize) -> Leak {
     }
 }
 
-
 /// Per untouched voxel, the number of axis directions (of six) whose first oriented
 /// surface voxel holds only triangles facing away (the voxel is behind them), and
 /// [`AXIS_FRONT`] when some direction meets a front. Rule 2 makes solid a voxel of an open region (a wall whose top is
@@ -554,7 +557,11 @@ fn axis_votes(
                     // (forward pass) or increasing k meets first: 0 nothing, 1 back, 2 front.
                     let mut last = 0u8;
                     for step in 0..grid.dims[k] {
-                        let s = if forward { step } else { grid.dims[k] - 1 - step };
+                        let s = if forward {
+                            step
+                        } else {
+                            grid.dims[k] - 1 - step
+                        };
                         let v = first + s * stride;
                         if state[v] == SURFACE {
                             let pos = orient[v] & (1 << (2 * k)) != 0;

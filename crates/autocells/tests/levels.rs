@@ -42,7 +42,11 @@ fn no_misses(scene: &Scene, auto: &AutoCells) {
             .copied()
             .filter(|o| pvs.binary_search(o).is_err())
             .collect();
-        assert!(missed.is_empty(), "cell {c} {:?} missed {missed:?}", auto.cell_box(c));
+        assert!(
+            missed.is_empty(),
+            "cell {c} {:?} missed {missed:?}",
+            auto.cell_box(c)
+        );
         judged += 1;
     }
     assert!(judged > 0);
@@ -114,5 +118,8 @@ fn bad_input_is_an_error_or_a_counted_warning() {
     objects.push(Object::mesh(Some("junk".into()), m, vec![], vec![]));
     let auto = AutoCells::build(&Scene::from_objects(objects), &opts(0.45)).expect("builds");
     assert_eq!(auto.report.voxels.degenerate_triangles, 2);
-    assert!(auto.report.smallest_hole > 0.45, "raised to fit the voxel budget");
+    assert!(
+        auto.report.smallest_hole > 0.45,
+        "raised to fit the voxel budget"
+    );
 }

@@ -27,19 +27,39 @@ fn pvs_build_query_cells_on_a_mesh_level() {
     let obj = level(dir.path());
     // Objects in info's order: floor, ceiling, walls, crate-a, crate-b, crate-d.
     let (code, out, err) = sightline(&[
-        "pvs", &obj, "--at=-3,-2,1.5", "--method", "portals", "--smallest-hole", "0.45", "--json",
+        "pvs",
+        &obj,
+        "--at=-3,-2,1.5",
+        "--method",
+        "portals",
+        "--smallest-hole",
+        "0.45",
+        "--json",
     ]);
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     let sources = ids(&v["visible_sources"]);
-    assert!(sources.contains(&4), "crate-b through the door: {sources:?}");
-    assert!(!sources.contains(&5), "crate-d around two corners: {sources:?}");
+    assert!(
+        sources.contains(&4),
+        "crate-b through the door: {sources:?}"
+    );
+    assert!(
+        !sources.contains(&5),
+        "crate-d around two corners: {sources:?}"
+    );
     assert!(!ids(&v["visible"]).is_empty());
 
     let pvs = dir.path().join("rooms.pvs");
     let pvs_s = pvs.to_string_lossy().into_owned();
     let (code, _, err) = sightline(&[
-        "build", &obj, "--method", "portals", "--smallest-hole", "0.45", "-o", &pvs_s,
+        "build",
+        &obj,
+        "--method",
+        "portals",
+        "--smallest-hole",
+        "0.45",
+        "-o",
+        &pvs_s,
     ]);
     assert_eq!(code, 0, "{err}");
     let (code, out, err) = sightline(&["query", &pvs_s, "--at=-3,-2,1.5", "--json"]);
@@ -58,12 +78,24 @@ fn pvs_build_query_cells_on_a_mesh_level() {
 
     // Errors, not panics.
     let (code, _, err) = sightline(&[
-        "pvs", &obj, "--at=0,-2,1.5", "--method", "portals", "--smallest-hole", "0.45",
+        "pvs",
+        &obj,
+        "--at=0,-2,1.5",
+        "--method",
+        "portals",
+        "--smallest-hole",
+        "0.45",
     ]);
     assert_ne!(code, 0);
     assert!(err.starts_with("error:"), "{err}");
     let (code, _, err) = sightline(&[
-        "pvs", &obj, "--at=-3,-2,1.5", "--method", "portals", "--smallest-hole", "1000",
+        "pvs",
+        &obj,
+        "--at=-3,-2,1.5",
+        "--method",
+        "portals",
+        "--smallest-hole",
+        "1000",
     ]);
     assert_ne!(code, 0);
     assert!(err.contains("larger than the level"), "{err}");
