@@ -51,8 +51,9 @@ pub struct Options {
     /// `true`: the flow through portal sequences (`portals`); `false`: the base flood
     /// only (`portals-fast`).
     pub full: bool,
-    /// The solver's cells: boxes connected within blocks of this many voxels a side
-    /// ([`cells::group_boxes`]); 0 or 1: every box its own cell.
+    /// The solver's cells when there are more than [`GROUP_ABOVE`] boxes: boxes
+    /// connected within blocks of this many voxels a side ([`cells::group_boxes`]);
+    /// 0 or 1: every box its own cell.
     pub group_block: usize,
 }
 
@@ -236,12 +237,13 @@ impl AutoCells {
     }
 
     /// The cell PVS of every cell: the flow through portal sequences (`full`) or the
-    /// base flood, on the boxes grouped by [`cells::group_boxes`] (`group_block`); a box
-    /// sees every box of every group its group sees.
+    /// base flood, on the boxes grouped by [`cells::group_boxes`] (`group_block`) when
+    /// there are more than [`GROUP_ABOVE`]; a box sees every box of every group its
+    /// group sees.
     pub fn solve(&mut self, full: bool, group_block: usize) {
         let t2 = Instant::now();
         let n = self.boxes.len();
-        let (group, groups) = if group_block > 1 {
+        let (group, groups) = if group_block > 1 && n > GROUP_ABOVE {
             cells::group_boxes(&self.boxes, &self.portals, group_block)
         } else {
             ((0..n as u32).collect(), n)
@@ -360,6 +362,10 @@ impl AutoCells {
         VoxelCell::new(c as u32, boxes).map(Cell::Voxels)
     }
 }
+
+/// Above this many boxes the solver works on groups of boxes (`Options::group_block`):
+/// the portal flood costs the square of the portals.
+pub const GROUP_ABOVE: usize = 2000;
 
 /// Clusters hold at most this many triangles.
 pub const MAX_CLUSTER_TRIANGLES: usize = 2048;

@@ -116,7 +116,11 @@ fn bad_input_is_an_error_or_a_counted_warning() {
         triangles: vec![[0, 1, 2], [0, 0, 0], [3, 4, 1]],
     };
     objects.push(Object::mesh(Some("junk".into()), m, vec![], vec![]));
-    let auto = AutoCells::build(&Scene::from_objects(objects), &opts(0.45)).expect("builds");
+    let small = Options {
+        max_voxels: 1 << 16,
+        ..opts(0.45)
+    };
+    let auto = AutoCells::build(&Scene::from_objects(objects), &small).expect("builds");
     assert_eq!(auto.report.voxels.degenerate_triangles, 2);
     assert!(
         auto.report.smallest_hole > 0.45,
