@@ -46,6 +46,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             Some(b) => b.parse()?,
             None => Options::default().group_block,
         },
+        axis_rule: std::env::var("AXIS_RULE").is_ok_and(|v| v == "1"),
         ..Options::default()
     };
     let cluster_size = sightline_autocells::default_cluster_size(&scene, &opts);

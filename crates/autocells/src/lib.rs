@@ -46,6 +46,9 @@ pub struct Options {
     pub max_voxels: usize,
     /// Share of front-face hits an enclosed region may see and still be solid.
     pub backface_tolerance: f64,
+    /// Rule 2 of [`voxels`]: voxels behind the geometry along every axis are solid
+    /// (off by default: not conservative, see docs/methods/auto-cells.md).
+    pub axis_rule: bool,
     /// Largest cell side, in voxels.
     pub max_box: usize,
     /// `true`: the flow through portal sequences (`portals`); `false`: the base flood
@@ -63,6 +66,7 @@ impl Default for Options {
             smallest_hole: None,
             max_voxels: 1 << 24,
             backface_tolerance: 0.05,
+            axis_rule: false,
             max_box: 64,
             full: true,
             group_block: 32,
@@ -177,7 +181,7 @@ impl AutoCells {
             size: h,
             dims: dims_for(h),
         };
-        let voxels = voxels::voxelize(grid, &tris, opts.backface_tolerance);
+        let voxels = voxels::voxelize_with(grid, &tris, opts.backface_tolerance, opts.axis_rule);
         let seconds_voxels = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
         let (boxes, owner) = greedy_boxes(&voxels, opts.max_box);

@@ -169,12 +169,9 @@ pub fn tri_box_overlap(center: DVec3, half: f64, tri: &[DVec3; 3]) -> bool {
         }
     }
     // Box faces.
-    for k in 0..3 {
-        let mn = v[0][k].min(v[1][k]).min(v[2][k]);
-        let mx = v[0][k].max(v[1][k]).max(v[2][k]);
-        if mn > half || mx < -half {
-            return false;
-        }
+    let (mn, mx) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
+    if mn.max_element() > half || mx.min_element() < -half {
+        return false;
     }
     // Triangle plane.
     let n = e[0].cross(e[1]);
@@ -218,6 +215,18 @@ pub fn touched(grid: &Grid, t: &[DVec3; 3], out: &mut Vec<usize>) {
 /// Voxelize `tris` on `grid` and classify (module doc). `backface_tolerance` is the
 /// share of front hits a component may have and still be solid.
 pub fn voxelize(grid: Grid, tris: &[[DVec3; 3]], backface_tolerance: f64) -> Voxels {
+    voxelize_with(grid, tris, backface_tolerance, false)
+}
+
+/// [`voxelize`], with rule 2 (`axis_rule`: voxels behind the geometry along every axis
+/// that meets any are solid) when asked. Rule 2 is not conservative: on pandora it
+/// closed open space next to the level's shell that the truth sees through.
+pub fn voxelize_with(
+    grid: Grid,
+    tris: &[[DVec3; 3]],
+    backface_tolerance: f64,
+    axis_rule: bool,
+) -> Voxels {
     let n = grid.len();
     let mut stats = VoxelStats {
         voxels: n,
@@ -343,7 +352,11 @@ pub fn voxelize(grid: Grid, tris: &[[DVec3; 3]], backface_tolerance: f64) -> Vox
     let votes = axis_votes(&grid, &state, &start, &tri_of, tris);
     let sees_front: Vec<bool> = votes.iter().map(|&x| x & AXIS_FRONT != 0).collect();
     for v in 0..n {
-        let behind = if sees_front[v] { 0 } else { votes[v] };
+        let behind = if sees_front[v] || !axis_rule {
+            0
+        } else {
+            votes[v]
+        };
         if state[v] == AIR && label[v] != u32::MAX && (solid_comp[label[v] as usize] || behind >= 2)
         {
             state[v] = SOLID;
@@ -351,11 +364,11 @@ pub fn voxelize(grid: Grid, tris: &[[DVec3; 3]], backface_tolerance: f64) -> Vox
     }
     // The grid's border layer lies outside the scene's bounding box (touching it at
     // most), which is convex: a segment between a viewpoint and a triangle, both
-    // inside it, never enters the layer. Closing it is exact, and it keeps the void around a level
-    // open to the sky from joining every courtyard to every other.
-    for v in 0..n {
-        if state[v] != SOLID && grid.on_border(grid.coords(v)) {
-            state[v] = SOLID;
+    // inside it, never enters the layer. Closing it is exact, and it keeps the void
+    // around a level open to the sky from joining every courtyard to every other.
+    for (v, s) in state.iter_mut().enumerate() {
+        if grid.on_border(grid.coords(v)) {
+            *s = SOLID;
         }
     }
     for &s in &state {
