@@ -116,9 +116,14 @@ pub enum Command {
     Cells {
         #[command(flatten)]
         scene: SceneArg,
-        /// Cell side in metres.
-        #[arg(long, default_value_t = 50.0, allow_hyphen_values = true)]
-        size: f64,
+        /// Cell side in metres (default 50; a mesh level without it gets its automatic
+        /// cells).
+        #[arg(long, allow_hyphen_values = true)]
+        size: Option<f64>,
+        /// Mesh levels with `portals`/`portals-fast`: the voxel size of the automatic
+        /// cells (scene units; default automatic, see docs/methods/auto-cells.md).
+        #[arg(long)]
+        smallest_hole: Option<f64>,
         /// Eye-height range, `Z0:Z1`.
         #[arg(long, default_value = "1.5:2.0", allow_hyphen_values = true)]
         z: String,
@@ -154,6 +159,10 @@ pub enum Command {
         /// keys each method takes are listed below).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
+        /// Mesh levels with `portals`/`portals-fast`: the voxel size of the automatic
+        /// cells (scene units; default automatic, see docs/methods/auto-cells.md).
+        #[arg(long)]
+        smallest_hole: Option<f64>,
         #[arg(long)]
         json: bool,
     },
@@ -202,6 +211,10 @@ pub enum Command {
         /// Build only shard I of N (`I/N`, or `auto/N` from JOB_COMPLETION_INDEX / SLURM_ARRAY_TASK_ID).
         #[arg(long)]
         shard: Option<String>,
+        /// Mesh levels with `portals`/`portals-fast`: the voxel size of the automatic
+        /// cells (scene units; default automatic, see docs/methods/auto-cells.md).
+        #[arg(long)]
+        smallest_hole: Option<f64>,
     },
     /// Merge shard .pvs files into one.
     Merge {

@@ -16,6 +16,7 @@ pub mod model;
 pub use info::SceneInfo;
 pub use model::{Geometry, Mesh, Object, ObjectKind, Prism, Scene, Warning};
 pub mod cells;
+pub mod clusters;
 pub mod export;
 pub mod generate;
 pub mod import;

@@ -25,8 +25,16 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
             out,
             resume,
             shard,
+            smallest_hole,
         } => {
             let opts = method_options(&method, resolution, sweep, planes, &set)?;
+            if let Some(full) = crate::commands::mesh::portal_mode(&scene.scene, &method) {
+                anyhow::ensure!(
+                    cells.is_none() && shard.is_none() && !resume,
+                    "a mesh level is built whole on its automatic cells: no --cells, --shard or --resume"
+                );
+                return crate::commands::mesh::build(&scene, full, smallest_hole, &out, quiet);
+            }
             if let Some(mode) = crate::commands::bsp::portal_mode(&scene.scene, &method)? {
                 anyhow::ensure!(
                     cells.is_none() && shard.is_none() && !resume,
@@ -158,6 +166,9 @@ struct QueryReport {
     /// The leaves the cell sees, when the file stores them (a BSP level's build).
     #[serde(skip_serializing_if = "Option::is_none")]
     visible_leaves: Option<Vec<u32>>,
+    /// Mesh levels: the source objects of the visible clusters (`info`'s order).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    visible_sources: Option<Vec<u32>>,
 }
 
 fn run_query(path: &Path, at: [f64; 3], json: bool) -> anyhow::Result<()> {
@@ -180,6 +191,10 @@ fn run_query(path: &Path, at: [f64; 3], json: bool) -> anyhow::Result<()> {
         leaf: file.cell(index).and_then(|c| c.id()),
         index,
         method: file.header().method.clone(),
+        visible_sources: crate::commands::mesh::sources_from_params(
+            &file.header().params,
+            &visible,
+        ),
         visible,
         visible_leaves: file.visible_leaves(index).map(<[u32]>::to_vec),
     };
@@ -208,6 +223,10 @@ fn run_query(path: &Path, at: [f64; 3], json: bool) -> anyhow::Result<()> {
         );
         let ids: Vec<String> = report.visible.iter().map(|i| i.to_string()).collect();
         println!("{}", ids.join(" "));
+        if let Some(s) = &report.visible_sources {
+            let ids: Vec<String> = s.iter().map(|i| i.to_string()).collect();
+            println!("source objects ({}): {}", s.len(), ids.join(" "));
+        }
         Ok(())
     }
 }

@@ -13,6 +13,7 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
     let Command::Cells {
         scene,
         size,
+        smallest_hole,
         z,
         clip,
         out,
@@ -20,6 +21,10 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
     else {
         unreachable!("cells::run called with another command")
     };
+    if size.is_none() && crate::commands::mesh::is_mesh(&scene.scene) {
+        return crate::commands::mesh::cells(&scene, smallest_hole, &out, quiet);
+    }
+    let size = size.unwrap_or(50.0);
     // Check the cheap arguments before loading anything.
     if !(size.is_finite() && size > 0.0) {
         bail!("--size must be a positive number of metres, got {size}");

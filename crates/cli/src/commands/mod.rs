@@ -12,6 +12,7 @@ mod frames;
 mod generate;
 mod info;
 mod map;
+mod mesh;
 mod pvs;
 mod serve;
 mod tiles;

@@ -27,18 +27,22 @@ pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
         sweep,
         planes,
         set,
+        smallest_hole,
         json,
     } = cmd
     else {
         unreachable!("dispatched by commands::run")
     };
     let opts = method_options(&method, resolution, sweep, planes, &set)?;
+    if let Some(full) = crate::commands::mesh::portal_mode(&scene.scene, &method) {
+        return crate::commands::mesh::pvs(&scene, full, smallest_hole, cell, at, json);
+    }
     if let Some(mode) = crate::commands::bsp::portal_mode(&scene.scene, &method)? {
         return crate::commands::bsp::pvs(&scene.scene, mode, cell, at, json);
     }
     if at.is_some() {
         anyhow::bail!(
-            "--at answers for the leaf holding a point: it needs a .bsp level and --method portals or portals-fast"
+            "--at answers for the leaf holding a point: it needs a .bsp or mesh level (.obj, .gltf, .glb) and --method portals or portals-fast"
         );
     }
     let Some(cell) = cell else {

@@ -1,0 +1,292 @@
+//! Mesh levels (`.obj`, `.gltf`, `.glb`) with the portal methods on automatic cells
+//! (`sightline-autocells`): `pvs LEVEL.obj --at X,Y,Z --method portals`, `build LEVEL.obj
+//! --method portals -o L.pvs` (every automatic cell stored as its box), `cells LEVEL.obj`.
+//! The PVS lists clusters (`visible`) and their source objects (`visible_sources`, in
+//! `info`'s order); a `.pvs` carries the cluster → source mapping in its parameters.
+
+use crate::cli::SceneArg;
+use crate::common::{load_scene, print_json};
+use anyhow::Context;
+use serde::Serialize;
+use sightline_autocells::{default_cluster_size, AutoCells, Options, MAX_CLUSTER_TRIANGLES};
+use sightline_core::Method;
+use sightline_geom::ViewCell;
+use sightline_scene::clusters::{cluster_scene, Clustered};
+use std::path::Path;
+use std::time::Instant;
+
+pub fn is_mesh(path: &Path) -> bool {
+    path.extension().is_some_and(|e| {
+        ["obj", "gltf", "glb"]
+            .iter()
+            .any(|m| e.eq_ignore_ascii_case(m))
+    })
+}
+
+/// `Some(full)` when `scene` is a mesh level and `method` a portal method.
+pub fn portal_mode(scene: &Path, method: &str) -> Option<bool> {
+    if !is_mesh(scene) {
+        return None;
+    }
+    match method.parse::<Method>() {
+        Ok(Method::Portals) => Some(true),
+        Ok(Method::PortalsFast) => Some(false),
+        _ => None,
+    }
+}
+
+fn options(smallest_hole: Option<f64>, full: bool) -> anyhow::Result<Options> {
+    if let Some(h) = smallest_hole {
+        anyhow::ensure!(
+            h.is_finite() && h > 0.0,
+            "--smallest-hole must be a positive number of scene units, got {h}"
+        );
+    }
+    Ok(Options {
+        smallest_hole,
+        full,
+        ..Options::default()
+    })
+}
+
+/// Load, cluster and cut the level into cells.
+fn prepare(
+    scene: &SceneArg,
+    smallest_hole: Option<f64>,
+    full: bool,
+    quiet: bool,
+) -> anyhow::Result<(Clustered, AutoCells)> {
+    let raw = load_scene(scene)?;
+    let opts = options(smallest_hole, full)?;
+    let clustered = cluster_scene(
+        &raw,
+        default_cluster_size(&raw, &opts),
+        MAX_CLUSTER_TRIANGLES,
+    );
+    let spinner = crate::common::progress(1, quiet, "voxels, cells, portals, PVS of every cell");
+    let auto = AutoCells::build(&clustered.scene, &opts)
+        .with_context(|| format!("cannot cut {} into cells", scene.scene.display()))?;
+    spinner.finish_and_clear();
+    if !quiet {
+        let r = &auto.report;
+        if let Some(asked) = r.smallest_hole_asked {
+            eprintln!(
+                "warning: smallest hole raised from {asked} to {:.3} to fit the voxel budget",
+                r.smallest_hole
+            );
+        }
+        if r.voxels.degenerate_triangles > 0 {
+            eprintln!(
+                "warning: {} degenerate triangles (zero area or not finite) skipped",
+                r.voxels.degenerate_triangles
+            );
+        }
+        if let Some(l) = &r.leak {
+            eprintln!(
+                "warning: the level leaks: free space at {:?} reaches the border at {:?} ({} voxels); the answer stays conservative",
+                l.inside,
+                l.border,
+                l.path.len()
+            );
+        }
+    }
+    Ok((clustered, auto))
+}
+
+fn method_name(full: bool) -> &'static str {
+    if full {
+        Method::Portals.name()
+    } else {
+        Method::PortalsFast.name()
+    }
+}
+
+#[derive(Serialize)]
+struct PvsReport {
+    method: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    at: Option<[f64; 3]>,
+    cell: ViewCell,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    index: Option<u32>,
+    objects: usize,
+    sources: usize,
+    visible: Vec<u32>,
+    visible_sources: Vec<u32>,
+    seconds: f64,
+}
+
+/// `pvs LEVEL.obj (--at X,Y,Z | --cell ...) --method portals|portals-fast`.
+pub fn pvs(
+    scene: &SceneArg,
+    full: bool,
+    smallest_hole: Option<f64>,
+    cell: Option<ViewCell>,
+    at: Option<[f64; 3]>,
+    json: bool,
+) -> anyhow::Result<()> {
+    let t = Instant::now();
+    let (clustered, auto) = prepare(scene, smallest_hole, full, true)?;
+    let (index, cell, visible) = if let Some(p) = at {
+        let c = auto.locate(p).with_context(|| {
+            format!(
+                "point {},{},{} is not in the level's free space (solid or outside)",
+                p[0], p[1], p[2]
+            )
+        })?;
+        (Some(c), auto.cell_box(c as usize), auto.pvs(c as usize))
+    } else if let Some(cell) = cell {
+        let mut v: Vec<u32> = (0..auto.len())
+            .filter(|&c| {
+                let b = auto.cell_box(c);
+                (0..3).all(|k| b.min[k] <= cell.max[k] && b.max[k] >= cell.min[k])
+            })
+            .flat_map(|c| auto.pvs(c))
+            .collect();
+        v.sort_unstable();
+        v.dedup();
+        (None, cell, v)
+    } else {
+        anyhow::bail!("give --at X,Y,Z or --cell X0,Y0,Z0,X1,Y1,Z1");
+    };
+    let report = PvsReport {
+        method: method_name(full),
+        at,
+        cell,
+        index,
+        objects: auto.objects,
+        sources: clustered.source_names.len(),
+        visible_sources: clustered.sources_of(&visible),
+        visible,
+        seconds: t.elapsed().as_secs_f64(),
+    };
+    if json {
+        return print_json(&report);
+    }
+    println!(
+        "{}: {} of {} clusters ({} of {} source objects) potentially visible from {} ({:.1} s)",
+        report.method,
+        report.visible.len(),
+        report.objects,
+        report.visible_sources.len(),
+        report.sources,
+        report.cell,
+        report.seconds
+    );
+    Ok(())
+}
+
+/// `build LEVEL.obj --method portals|portals-fast -o L.pvs`: every automatic cell,
+/// stored as its box, with its cluster PVS; the parameters carry the smallest hole and
+/// the cluster → source mapping.
+pub fn build(
+    scene: &SceneArg,
+    full: bool,
+    smallest_hole: Option<f64>,
+    out: &Path,
+    quiet: bool,
+) -> anyhow::Result<()> {
+    let t = Instant::now();
+    let (clustered, auto) = prepare(scene, smallest_hole, full, quiet)?;
+    let cells: Vec<sightline_core::Cell> = auto
+        .cell_boxes()
+        .into_iter()
+        .map(sightline_core::Cell::Box)
+        .collect();
+    let sets: Vec<roaring::RoaringBitmap> = (0..auto.len())
+        .map(|c| auto.pvs(c).into_iter().collect())
+        .collect();
+    let params = vec![
+        (
+            "smallest_hole".to_string(),
+            auto.report.smallest_hole.to_string(),
+        ),
+        ("sources".to_string(), join(&clustered.source)),
+        (
+            "source_names".to_string(),
+            serde_json::to_string(&clustered.source_names)?,
+        ),
+    ];
+    let header = sightline_pvs::Header::new(
+        clustered.scene.fingerprint(),
+        method_name(full),
+        params,
+        auto.objects,
+        cells.len(),
+    );
+    let present: Vec<u32> = (0..cells.len() as u32).collect();
+    let bytes = sightline_pvs::format::encode_cells(
+        &header,
+        &cells,
+        &present,
+        &sets,
+        &sightline_pvs::format::EncodeOptions::default(),
+    )?;
+    sightline_pvs::build::write_atomic(out, &bytes)
+        .with_context(|| format!("cannot write {}", out.display()))?;
+    if !quiet {
+        let r = &auto.report;
+        eprintln!(
+            "wrote {}: {} automatic cells, {} portals, {} clusters of {} source objects, smallest hole {:.3}, method {}, {} bytes, {:.1} s",
+            out.display(),
+            r.cells,
+            r.portals,
+            auto.objects,
+            clustered.source_names.len(),
+            r.smallest_hole,
+            method_name(full),
+            bytes.len(),
+            t.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+fn join(ids: &[u32]) -> String {
+    ids.iter()
+        .map(|i| i.to_string())
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+/// The source objects of `visible` when a `.pvs`'s parameters carry the mapping.
+pub fn sources_from_params(params: &[(String, String)], visible: &[u32]) -> Option<Vec<u32>> {
+    let (_, s) = params.iter().find(|(k, _)| k == "sources")?;
+    let map: Vec<u32> = s
+        .split(',')
+        .filter(|x| !x.is_empty())
+        .map(|x| x.parse().ok())
+        .collect::<Option<_>>()?;
+    let mut out: Vec<u32> = visible
+        .iter()
+        .filter_map(|&c| map.get(c as usize).copied())
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    Some(out)
+}
+
+/// `cells LEVEL.obj -o cells.json`: the automatic cells as boxes.
+pub fn cells(
+    scene: &SceneArg,
+    smallest_hole: Option<f64>,
+    out: &Path,
+    quiet: bool,
+) -> anyhow::Result<()> {
+    let (_, auto) = prepare(scene, smallest_hole, false, quiet)?;
+    let boxes = auto.cell_boxes();
+    crate::common::write_atomic(out, &serde_json::to_vec(&boxes)?)?;
+    let r = &auto.report;
+    println!(
+        "{} automatic cells ({} portals; voxels {:?} of {:.3}: {} surface, {} air, {} solid) → {}",
+        r.cells,
+        r.portals,
+        r.grid,
+        r.smallest_hole,
+        r.voxels.surface,
+        r.voxels.air,
+        r.voxels.solid,
+        out.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,102 @@
+//! Mesh levels on the command line: automatic cells (`cells LEVEL.obj`), `pvs LEVEL.obj
+//! --at X,Y,Z --method portals`, `build LEVEL.obj --method portals` and `query`.
+
+mod common;
+
+use common::sightline;
+use sightline_autocells::testlevel::two_rooms_and_a_door;
+
+fn level(dir: &std::path::Path) -> String {
+    let path = dir.join("rooms.obj");
+    let mut f = std::fs::File::create(&path).unwrap();
+    sightline_scene::export::write_obj(&two_rooms_and_a_door(0.0), &mut f).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+fn ids(v: &serde_json::Value) -> Vec<u64> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_u64().unwrap())
+        .collect()
+}
+
+#[test]
+fn pvs_build_query_cells_on_a_mesh_level() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = level(dir.path());
+    // Objects in info's order: floor, ceiling, walls, crate-a, crate-b, crate-d.
+    let (code, out, err) = sightline(&[
+        "pvs",
+        &obj,
+        "--at=-3,-2,1.5",
+        "--method",
+        "portals",
+        "--smallest-hole",
+        "0.45",
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let sources = ids(&v["visible_sources"]);
+    assert!(
+        sources.contains(&4),
+        "crate-b through the door: {sources:?}"
+    );
+    assert!(
+        !sources.contains(&5),
+        "crate-d around two corners: {sources:?}"
+    );
+    assert!(!ids(&v["visible"]).is_empty());
+
+    let pvs = dir.path().join("rooms.pvs");
+    let pvs_s = pvs.to_string_lossy().into_owned();
+    let (code, _, err) = sightline(&[
+        "build",
+        &obj,
+        "--method",
+        "portals",
+        "--smallest-hole",
+        "0.45",
+        "-o",
+        &pvs_s,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (code, out, err) = sightline(&["query", &pvs_s, "--at=-3,-2,1.5", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let q: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(ids(&q["visible"]), ids(&v["visible"]));
+    assert_eq!(ids(&q["visible_sources"]), sources);
+
+    let cells = dir.path().join("cells.json");
+    let cells_s = cells.to_string_lossy().into_owned();
+    let (code, _, err) = sightline(&["cells", &obj, "--smallest-hole", "0.45", "-o", &cells_s]);
+    assert_eq!(code, 0, "{err}");
+    let boxes: Vec<[f64; 6]> =
+        serde_json::from_str(&std::fs::read_to_string(&cells).unwrap()).unwrap();
+    assert!(boxes.len() > 1);
+
+    // Errors, not panics.
+    let (code, _, err) = sightline(&[
+        "pvs",
+        &obj,
+        "--at=0,-2,1.5",
+        "--method",
+        "portals",
+        "--smallest-hole",
+        "0.45",
+    ]);
+    assert_ne!(code, 0);
+    assert!(err.starts_with("error:"), "{err}");
+    let (code, _, err) = sightline(&[
+        "pvs",
+        &obj,
+        "--at=-3,-2,1.5",
+        "--method",
+        "portals",
+        "--smallest-hole",
+        "1000",
+    ]);
+    assert_ne!(code, 0);
+    assert!(err.contains("larger than the level"), "{err}");
+}
