@@ -170,9 +170,5 @@ pub(crate) fn plan_png(
         .context("drawing the map")?;
         root.present().context("drawing the map")?;
     }
-    let img = image::RgbImage::from_raw(w, h, buf).context("map buffer size")?;
-    let mut png = Vec::new();
-    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
-        .context("encoding the PNG")?;
-    Ok(png)
+    super::map::encode_png(w, h, buf)
 }

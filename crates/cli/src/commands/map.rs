@@ -291,11 +291,7 @@ fn render(
         .context("drawing the map")?;
         root.present().context("drawing the map")?;
     }
-    let img = image::RgbImage::from_raw(w, h, buf).context("map buffer size")?;
-    let mut png = Vec::new();
-    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
-        .context("encoding the PNG")?;
-    Ok(png)
+    encode_png(w, h, buf)
 }
 
 /// A legend row at height `y`: a filled square and a label per entry, left to right.
@@ -317,4 +313,13 @@ where
         x += 40 + 10 * label.len() as i32;
     }
     Ok(())
+}
+
+/// An RGB buffer of `w` × `h` as PNG bytes.
+pub(crate) fn encode_png(w: u32, h: u32, buf: Vec<u8>) -> anyhow::Result<Vec<u8>> {
+    let img = image::RgbImage::from_raw(w, h, buf).context("map buffer size")?;
+    let mut png = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .context("encoding the PNG")?;
+    Ok(png)
 }
