@@ -10,14 +10,7 @@ use sightline_scene::import::{load, ImportOptions};
 use std::time::Instant;
 
 fn peak_mb() -> f64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("VmHWM:"))
-                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
-        })
-        .map_or(f64::NAN, |kb| kb / 1024.0)
+    sightline_stats::memory_kib().1 as f64 / 1024.0
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
