@@ -4,18 +4,23 @@
 //! * A voxel is **surface** when a triangle meets the closed voxel grown by a hair
 //!   (`TOUCH_EPS` of the voxel size): a line may pass beside the triangle inside it,
 //!   so surface voxels are open.
-//! * Untouched voxels are flood-filled into components through shared faces.
+//! * The grid's **border layer** lies just outside the scene's bounding box; no
+//!   segment between two points of the (convex) box enters it, so it is solid, and it
+//!   is closed before anything else.
+//! * Untouched voxels inside the border are flood-filled into components through
+//!   shared faces.
 //! * A component is **solid** when rays cast from its boundary voxels (those next to a
 //!   surface voxel; 14 directions, 6 axes and 8 diagonals) first hit the *back* of a
 //!   triangle: at least one back hit and at most `backface_tolerance` of the hits on
 //!   a front. From inside closed geometry a ray can only meet the back of the
 //!   surface that encloses it, so an enclosed region is solid, and a region that sees
 //!   the front of the geometry is air. Rays that leave the grid do not vote.
-//! * The component touching the grid's border is the **outside**. It too becomes
+//! * A component next to the border layer is an **outside** region. It too becomes
 //!   solid when it only sees back faces: the outside of a sealed indoor level, the
-//!   void qbsp fills. When the outside sees the back of the geometry and yet stays air
-//!   (it also sees fronts: the level's inside), the level **leaks**: reported with a
-//!   voxel path from a voxel that saw a front face to the border, as qbsp does.
+//!   void qbsp fills, or the inside of walls whose tops meet the bounding box unclosed.
+//!   When such a region sees the back of the geometry and yet stays air (it also sees
+//!   fronts: the level's inside), the level **leaks**: reported with a voxel path from
+//!   a voxel that saw a front face to the border, as qbsp does.
 
 use rayon::prelude::*;
 use sightline_geom::DVec3;
@@ -113,7 +118,9 @@ pub struct VoxelStats {
 pub struct Leak {
     /// Centre of the inside voxel (it saw a front face).
     pub inside: [f64; 3],
-    /// Centre of the first voxel of the path that lies on the grid's border.
+    /// Centre of the void voxel the path ends at: next to the grid's border layer
+    /// (just outside the scene's bounding box) and meeting no front face along the
+    /// axes (any voxel next to the border layer when no such voxel is reachable).
     pub border: [f64; 3],
     /// Voxel centres from `inside` to `border`, face neighbours, all untouched.
     pub path: Vec<[f64; 3]>,
@@ -262,9 +269,16 @@ pub fn voxelize_with(
     }
     let tri_of: Vec<u32> = pairs.iter().map(|&(_, t)| t).collect();
     drop(pairs);
+    // The grid's border layer lies outside the scene's bounding box (touching it at
+    // most), which is convex: a segment between a viewpoint and a triangle, both
+    // inside it, never enters the layer. Closing it is exact. It is closed before the
+    // flood: through it, the room air under a level's open sky and the inside of its
+    // walls (open at the top where the sky faces are missing) would be one component.
     let mut state: Vec<u8> = (0..n)
         .map(|v| {
-            if start[v + 1] > start[v] {
+            if grid.on_border(grid.coords(v)) {
+                SOLID
+            } else if start[v + 1] > start[v] {
                 SURFACE
             } else {
                 AIR
@@ -275,6 +289,7 @@ pub fn voxelize_with(
     // Components of untouched voxels.
     let mut label = vec![u32::MAX; n];
     let mut comps: Vec<Vec<u32>> = Vec::new(); // boundary voxels of each component
+    let mut outside: Vec<bool> = Vec::new(); // the component meets the border layer
     let mut queue = VecDeque::new();
     for seed in 0..n {
         if state[seed] != AIR || label[seed] != u32::MAX {
@@ -282,6 +297,7 @@ pub fn voxelize_with(
         }
         let c = comps.len() as u32;
         let mut boundary = Vec::new();
+        let mut at_border = false;
         label[seed] = c;
         queue.push_back(seed);
         while let Some(v) = queue.pop_front() {
@@ -289,6 +305,8 @@ pub fn voxelize_with(
             for w in grid.neighbours(v) {
                 if state[w] == SURFACE {
                     next_to_surface = true;
+                } else if state[w] == SOLID {
+                    at_border = true;
                 } else if label[w] == u32::MAX {
                     label[w] = c;
                     queue.push_back(w);
@@ -299,6 +317,7 @@ pub fn voxelize_with(
             }
         }
         comps.push(boundary);
+        outside.push(at_border);
     }
     stats.components = comps.len();
 
@@ -319,7 +338,18 @@ pub fn voxelize_with(
                     match first_hit(voxels_ref, o, d.normalize()) {
                         Some(true) => {
                             front += 1;
-                            front_voxel.get_or_insert(v);
+                            // The deepest such voxel (farthest from the grid's
+                            // border) starts the leak path: the level's inside.
+                            let depth = |v: u32| {
+                                let c = voxels_ref.0.coords(v as usize);
+                                (0..3)
+                                    .map(|k| c[k].min(voxels_ref.0.dims[k] - 1 - c[k]))
+                                    .min()
+                                    .unwrap_or(0)
+                            };
+                            if front_voxel.is_none_or(|f| depth(v) > depth(f)) {
+                                front_voxel = Some(v);
+                            }
                         }
                         Some(false) => back += 1,
                         None => {}
@@ -329,17 +359,21 @@ pub fn voxelize_with(
             (front, back, front_voxel)
         })
         .collect();
-    let border_comp = label[0];
+    let axis = axis_votes(&grid, &state, &start, &tri_of, tris);
+    let sees_front: Vec<bool> = axis.iter().map(|&x| x & AXIS_FRONT != 0).collect();
     let mut leak = None;
+    let mut worst_leak = 0;
     for (c, &(front, back, front_voxel)) in votes.iter().enumerate() {
         let hits = front + back;
         let solid = back > 0 && (front as f64) <= backface_tolerance * hits as f64;
         if solid {
             stats.solid_components += 1;
-        } else if c as u32 == border_comp && back * 4 >= hits && hits > 0 {
-            // The outside sees the back of the geometry (≥ 25 %) yet some fronts.
+        } else if outside[c] && back * 4 >= hits && back > worst_leak {
+            // An outside region sees the back of the geometry (≥ 25 %) yet some
+            // fronts: the one with the most back hits is reported.
             if let Some(v) = front_voxel {
-                leak = Some(leak_path(&grid, &label, v as usize));
+                worst_leak = back;
+                leak = Some(leak_path(&grid, &label, &sees_front, v as usize));
             }
         }
     }
@@ -349,8 +383,7 @@ pub fn voxelize_with(
         .iter()
         .map(|&(f, b, _)| b > 0 && (f as f64) <= backface_tolerance * (f + b) as f64)
         .collect();
-    let votes = axis_votes(&grid, &state, &start, &tri_of, tris);
-    let sees_front: Vec<bool> = votes.iter().map(|&x| x & AXIS_FRONT != 0).collect();
+    let votes = axis;
     for v in 0..n {
         let behind = if sees_front[v] || !axis_rule {
             0
@@ -360,15 +393,6 @@ pub fn voxelize_with(
         if state[v] == AIR && label[v] != u32::MAX && (solid_comp[label[v] as usize] || behind >= 2)
         {
             state[v] = SOLID;
-        }
-    }
-    // The grid's border layer lies outside the scene's bounding box (touching it at
-    // most), which is convex: a segment between a viewpoint and a triangle, both
-    // inside it, never enters the layer. Closing it is exact, and it keeps the void
-    // around a level open to the sky from joining every courtyard to every other.
-    for (v, s) in state.iter_mut().enumerate() {
-        if grid.on_border(grid.coords(v)) {
-            *s = SOLID;
         }
     }
     for &s in &state {
@@ -483,18 +507,23 @@ fn ray_triangle(o: DVec3, d: DVec3, t: &[DVec3; 3]) -> Option<(f64, bool)> {
     (th > 0.0).then_some((th, det > 0.0))
 }
 
-/// A path of untouched voxels from `inside` to the border of the grid (breadth first
-/// within the component of `inside`).
-fn leak_path(grid: &Grid, label: &[u32], inside: usize) -> Leak {
+/// A shortest path of untouched voxels (within the component of `inside`) from
+/// `inside` to the void: a voxel next to the grid's border layer that meets no front
+/// face along the axes, or failing that any voxel next to the border layer.
+fn leak_path(grid: &Grid, label: &[u32], sees_front: &[bool], inside: usize) -> Leak {
     let c = label[inside];
     let mut prev = vec![u32::MAX; grid.len()];
     let mut queue = VecDeque::from([inside]);
     prev[inside] = inside as u32;
-    let mut end = inside;
+    let mut end = None;
+    let mut fallback = None;
     while let Some(v) = queue.pop_front() {
-        if grid.on_border(grid.coords(v)) {
-            end = v;
-            break;
+        if grid.neighbours(v).any(|w| grid.on_border(grid.coords(w))) {
+            fallback.get_or_insert(v);
+            if !sees_front[v] {
+                end = Some(v);
+                break;
+            }
         }
         for w in grid.neighbours(v) {
             if label[w] == c && prev[w] == u32::MAX {
@@ -503,6 +532,7 @@ fn leak_path(grid: &Grid, label: &[u32], inside: usize) -> Leak {
             }
         }
     }
+    let end = end.or(fallback).unwrap_or(inside);
     let mut path = vec![end];
     while *path.last().unwrap_or(&inside) != inside {
         let p = prev[*path.last().unwrap_or(&inside)] as usize;
@@ -536,7 +566,7 @@ fn axis_votes(
     let orient: Vec<u8> = (0..n)
         .into_par_iter()
         .map(|v| {
-            if state[v] != SURFACE {
+            if start[v + 1] == start[v] {
                 return 0;
             }
             let mut bits = 0u8;
@@ -576,7 +606,7 @@ fn axis_votes(
                             grid.dims[k] - 1 - step
                         };
                         let v = first + s * stride;
-                        if state[v] == SURFACE {
+                        if start[v + 1] > start[v] {
                             let pos = orient[v] & (1 << (2 * k)) != 0;
                             let neg = orient[v] & (1 << (2 * k + 1)) != 0;
                             // Ray towards -k (forward pass) meets a front when n_k > 0.

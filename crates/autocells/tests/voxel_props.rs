@@ -63,3 +63,30 @@ fn closed_box_interior_is_solid() {
     assert_ne!(v.state[v.grid.index(o[0], o[1], o[2])], SOLID);
     assert!(v.leak.is_none());
 }
+
+/// A room (faces towards its inside) with its +x wall missing, in the open: the
+/// outside sees the walls' backs and reaches the room's inside, which sees fronts. The
+/// leak is reported from inside the room to the void next to the grid's border.
+#[test]
+fn open_room_leaks_from_inside_to_the_void() {
+    let m = closed_box(DVec3::splat(2.0), DVec3::splat(6.0));
+    let soup: Vec<[DVec3; 3]> = m
+        .triangles
+        .iter()
+        .map(|t| m.triangle(t))
+        .filter(|t| t.iter().any(|p| p.x < 5.99))
+        .map(|[a, b, c]| [a, c, b])
+        .collect();
+    let v = voxelize(grid(), &soup, 0.05);
+    let leak = v.leak.expect("the open room leaks");
+    let inside = DVec3::from_array(leak.inside);
+    let void = DVec3::from_array(leak.border);
+    assert!(inside.cmpgt(DVec3::splat(2.0)).all() && inside.cmplt(DVec3::splat(6.0)).all());
+    assert!(!(void.cmpgt(DVec3::splat(1.5)).all() && void.cmplt(DVec3::splat(6.5)).all()));
+    assert_eq!(leak.path.first(), Some(&leak.inside));
+    assert_eq!(leak.path.last(), Some(&leak.border));
+    for w in leak.path.windows(2) {
+        let d = DVec3::from_array(w[1]) - DVec3::from_array(w[0]);
+        assert!((d.length() - v.grid.size).abs() < 1e-9, "face neighbours");
+    }
+}
