@@ -4,7 +4,7 @@
 //! default 20; `fast`: the base flood only, `portals-fast`).
 
 use sightline_autocells::{AutoCells, Options};
-use sightline_core::check::{TruthOptions, TruthScene};
+use sightline_core::check::TruthOptions;
 use sightline_scene::clusters::cluster_scene;
 use sightline_scene::import::{load, ImportOptions};
 use std::time::Instant;
@@ -125,7 +125,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     // The judge: the item-buffer truth from the free voxels of K cells spread over the
     // cell list (cells without an air voxel skipped).
-    let truth = TruthScene::new(&clustered.scene);
     let topts = TruthOptions {
         samples: 16,
         resolution_px: 256,
@@ -133,29 +132,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         seed: 7,
     };
     let t3 = Instant::now();
-    let (mut judged, mut missed, mut seen) = (0, 0, 0);
-    let step = (auto.len() / (4 * k).max(1)).max(1);
-    for c in (0..auto.len()).step_by(step) {
-        if judged >= k {
-            break;
-        }
-        let Some(region) = auto.free_region(c) else {
-            continue;
-        };
-        let t = truth.ground_truth_in(&region, &topts);
-        if t.samples_used == 0 {
-            continue;
-        }
-        let pvs = auto.pvs(c);
-        let m: Vec<u32> = t
-            .visible
-            .iter()
-            .copied()
-            .filter(|o| pvs.binary_search(o).is_err())
-            .collect();
-        if !m.is_empty() {
-            println!("MISS     cell {c} {:?}: {m:?}", auto.cell_box(c));
-            for w in t.witnesses.iter().filter(|w| m.contains(&w.id)) {
+    let judged_cells = auto.judge(&clustered.scene, k, &topts);
+    let (judged, mut missed, mut seen) = (judged_cells.len(), 0, 0);
+    for j in &judged_cells {
+        if !j.missed.is_empty() {
+            println!("MISS     cell {} {:?}", j.cell, j.bounds);
+            for w in &j.missed {
                 let o = sightline_geom::DVec3::from_array(w.viewpoint);
                 let d = sightline_geom::DVec3::from_array(w.direction);
                 // Voxel states along the witness ray, every half voxel, up to 64 voxels.
@@ -177,15 +159,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 );
             }
         }
-        missed += m.len();
-        seen += t.visible.len();
-        judged += 1;
+        missed += j.missed.len();
+        seen += j.truth;
         println!(
-            "judge    cell {c}: truth {} ⊆ pvs {} of {} ({} viewpoints)",
-            t.visible.len(),
-            pvs.len(),
-            auto.objects,
-            t.samples_used
+            "judge    cell {}: truth {} ⊆ pvs {} of {} ({} viewpoints)",
+            j.cell, j.truth, j.pvs, auto.objects, j.viewpoints
         );
     }
     println!(

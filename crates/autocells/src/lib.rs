@@ -22,6 +22,7 @@
 //! ```
 
 pub mod cells;
+pub mod judge;
 pub mod testlevel;
 pub mod voxels;
 

@@ -261,6 +261,10 @@ pub enum Command {
         /// and the ray oracle (--cells K: K source leaves for the oracle, default 20).
         #[arg(long, value_parser = ["vis"])]
         reference: Option<String>,
+        /// Mesh levels with `portals`/`portals-fast`: the voxel size of the automatic
+        /// cells (scene units; default automatic, see docs/methods/auto-cells.md).
+        #[arg(long)]
+        smallest_hole: Option<f64>,
         #[arg(long)]
         json: bool,
     },

@@ -100,3 +100,28 @@ fn pvs_build_query_cells_on_a_mesh_level() {
     assert_ne!(code, 0);
     assert!(err.contains("larger than the level"), "{err}");
 }
+
+#[test]
+fn check_judges_the_automatic_cells_by_the_truth() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = level(dir.path());
+    let (code, out, err) = sightline(&[
+        "check",
+        &obj,
+        "--method",
+        "portals",
+        "--smallest-hole",
+        "0.45",
+        "--cells",
+        "3",
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["missed"], 0);
+    assert!(v["judged"].as_u64().unwrap() >= 1, "{v}");
+    assert!(v["culled_median"].as_f64().unwrap() > 0.0, "{v}");
+    let (code, _, err) = sightline(&["check", &obj, "--method", "portals", "--reference", "vis"]);
+    assert_ne!(code, 0);
+    assert!(err.starts_with("error:"), "{err}");
+}

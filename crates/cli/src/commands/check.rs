@@ -57,11 +57,28 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         planes,
         set,
         reference,
+        smallest_hole,
         json,
     } = cmd
     else {
         bail!("internal: `check` called with another command");
     };
+    if let Some(full) = method
+        .as_deref()
+        .and_then(|m| crate::commands::mesh::portal_mode(&scene.scene, m))
+    {
+        if reference.is_some() {
+            bail!("--reference vis needs a .bsp level: a mesh level carries no reference PVS");
+        }
+        let k = count_arg(
+            cells.as_deref(),
+            "on a mesh level, --cells is a number of automatic cells to judge",
+        )?;
+        return crate::commands::mesh::check(&scene, full, smallest_hole, k, json, quiet);
+    }
+    if smallest_hole.is_some() {
+        bail!("--smallest-hole sets the automatic cells of a mesh level (.obj, .gltf, .glb) with --method portals or portals-fast");
+    }
     if let Some(mode) = method
         .as_deref()
         .map(|m| crate::commands::bsp::portal_mode(&scene.scene, m))

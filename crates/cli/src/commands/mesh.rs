@@ -9,6 +9,7 @@ use crate::common::{load_scene, print_json};
 use anyhow::Context;
 use serde::Serialize;
 use sightline_autocells::{default_cluster_size, AutoCells, Options, MAX_CLUSTER_TRIANGLES};
+use sightline_core::check::TruthOptions;
 use sightline_core::Method;
 use sightline_geom::ViewCell;
 use sightline_scene::clusters::{cluster_scene, Clustered};
@@ -172,6 +173,79 @@ pub fn pvs(
         report.sources,
         report.cell,
         report.seconds
+    );
+    Ok(())
+}
+
+/// `check LEVEL.obj --method portals|portals-fast [--cells K]`: K automatic cells
+/// judged by the item-buffer truth sampled in their free space
+/// (`AutoCells::judge`); an error when a cluster the truth sees is missing.
+pub fn check(
+    scene: &SceneArg,
+    full: bool,
+    smallest_hole: Option<f64>,
+    k: usize,
+    json: bool,
+    quiet: bool,
+) -> anyhow::Result<()> {
+    let t = Instant::now();
+    let (clustered, auto) = prepare(scene, smallest_hole, full, quiet)?;
+    let seconds_pvs = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let spinner = crate::common::progress(1, quiet, "ground truth in the judged cells");
+    let judged = auto.judge(&clustered.scene, k, &TruthOptions::default());
+    spinner.finish_and_clear();
+    let missed: usize = judged.iter().map(|j| j.missed.len()).sum();
+    let mut over: Vec<f64> = judged
+        .iter()
+        .map(|j| j.pvs as f64 / j.truth.max(1) as f64)
+        .collect();
+    over.sort_by(f64::total_cmp);
+    let mut culled: Vec<f64> = (0..auto.len())
+        .map(|c| 1.0 - auto.pvs(c).len() as f64 / auto.objects.max(1) as f64)
+        .collect();
+    culled.sort_by(f64::total_cmp);
+    let median = |v: &[f64]| v.get(v.len() / 2).copied().unwrap_or(0.0);
+    let report = serde_json::json!({
+        "method": method_name(full),
+        "cells": auto.len(),
+        "clusters": auto.objects,
+        "judged": judged.len(),
+        "missed": missed,
+        "over_median": median(&over),
+        "culled_median": median(&culled),
+        "seconds_pvs": seconds_pvs,
+        "seconds_truth": t.elapsed().as_secs_f64(),
+        "leak": auto.report.leak.as_ref().map(|l| serde_json::json!({"inside": l.inside, "void": l.border})),
+        "judged_cells": judged,
+    });
+    if json {
+        print_json(&report)?;
+    } else {
+        println!(
+            "{}: {} cells, {} judged, missed {missed}, PVS / truth median {:.2}, median cell culls {:.1} % of {} clusters (PVS of every cell {:.1} s, truth {:.1} s)",
+            method_name(full),
+            auto.len(),
+            judged.len(),
+            median(&over),
+            100.0 * median(&culled),
+            auto.objects,
+            seconds_pvs,
+            t.elapsed().as_secs_f64()
+        );
+        for j in &judged {
+            for w in &j.missed {
+                println!(
+                    "missed: cluster {} of cell {} seen from {:?} along {:?}",
+                    w.id, j.cell, w.viewpoint, w.direction
+                );
+            }
+        }
+    }
+    anyhow::ensure!(
+        missed == 0,
+        "method {} missed {missed} visible cluster(s) — a conservativeness bug (witnesses above)",
+        method_name(full)
     );
     Ok(())
 }
