@@ -78,7 +78,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         sightline_autocells::MAX_CLUSTER_TRIANGLES
     );
     println!(
-        "voxels   {} ({:?}, smallest hole {:.3}{}): {} surface, {} air, {} solid; {} components, {} solid; {} degenerate triangles ({:.2} s)",
+        "voxels   {} ({:?}, smallest hole {:.3}{}): {} surface, {} air, {} solid; {} components, {} solid; {} closed faces; {} degenerate triangles ({:.2} s)",
         r.voxels.voxels,
         r.grid,
         r.smallest_hole,
@@ -88,6 +88,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         r.voxels.solid,
         r.voxels.components,
         r.voxels.solid_components,
+        r.voxels.closed_faces,
         r.voxels.degenerate_triangles,
         r.seconds_voxels
     );

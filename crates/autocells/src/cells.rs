@@ -5,9 +5,11 @@
 //! open voxel starts a box grown along x, then y, then z while the whole new row or
 //! slab is open and unassigned, up to `max_box` voxels per side. Every box is a
 //! convex cell. Two boxes that share part of a face share one portal: the rectangle
-//! of the overlap, covering it whole. Sight crosses from box to box only through open
-//! voxels, that is through these rectangles, so no opening is ever smaller than its
-//! portal.
+//! of the overlap, covering it whole, less its closed faces ([`crate::faces`]: faces
+//! inside a polygon of the surface, which no sight line crosses); no box holds a
+//! closed face inside. Sight crosses from box to box only through open voxels and open
+//! faces, that is through these rectangles, so no opening is ever smaller than its
+//! portals.
 
 use crate::voxels::Voxels;
 use sightline_geom::{DVec3, ViewCell};
@@ -38,6 +40,9 @@ pub fn greedy_boxes(v: &Voxels, max_box: usize) -> (Vec<VoxelBox>, Vec<u32>) {
     let mut owner = vec![u32::MAX; g.len()];
     let mut boxes = Vec::new();
     let free = |owner: &[u32], i: usize| v.is_open(i) && owner[i] == u32::MAX;
+    // A box holds no closed face between two of its voxels: the flow assumes sight
+    // crosses a cell freely.
+    let closed = |x: usize, y: usize, z: usize, k: usize| v.face_closed(g.index(x, y, z), k);
     for z in 0..nz {
         for y in 0..ny {
             for x in 0..nx {
@@ -45,20 +50,35 @@ pub fn greedy_boxes(v: &Voxels, max_box: usize) -> (Vec<VoxelBox>, Vec<u32>) {
                     continue;
                 }
                 let mut x1 = x + 1;
-                while x1 < nx && x1 - x < max_box && free(&owner, g.index(x1, y, z)) {
+                while x1 < nx
+                    && x1 - x < max_box
+                    && free(&owner, g.index(x1, y, z))
+                    && !closed(x1 - 1, y, z, 0)
+                {
                     x1 += 1;
                 }
                 let mut y1 = y + 1;
                 while y1 < ny
                     && y1 - y < max_box
-                    && (x..x1).all(|xx| free(&owner, g.index(xx, y1, z)))
+                    && (x..x1).all(|xx| {
+                        free(&owner, g.index(xx, y1, z))
+                            && !closed(xx, y1 - 1, z, 1)
+                            && (xx + 1 == x1 || !closed(xx, y1, z, 0))
+                    })
                 {
                     y1 += 1;
                 }
                 let mut z1 = z + 1;
                 while z1 < nz
                     && z1 - z < max_box
-                    && (y..y1).all(|yy| (x..x1).all(|xx| free(&owner, g.index(xx, yy, z1))))
+                    && (y..y1).all(|yy| {
+                        (x..x1).all(|xx| {
+                            free(&owner, g.index(xx, yy, z1))
+                                && !closed(xx, yy, z1 - 1, 2)
+                                && (xx + 1 == x1 || !closed(xx, yy, z1, 0))
+                                && (yy + 1 == y1 || !closed(xx, yy, z1, 1))
+                        })
+                    })
                 {
                     z1 += 1;
                 }
@@ -116,33 +136,81 @@ pub fn portals(v: &Voxels, boxes: &[VoxelBox], owner: &[u32]) -> Vec<Portal> {
             }
             for &o in &seen {
                 let n = &boxes[o as usize];
-                let a0 = b.lo[a].max(n.lo[a]);
-                let a1 = b.hi[a].min(n.hi[a]);
-                let c0 = b.lo[c].max(n.lo[c]);
-                let c1 = b.hi[c].min(n.hi[c]);
-                let corner = |i: usize, j: usize| {
+                let (ra0, ra1) = (b.lo[a].max(n.lo[a]), b.hi[a].min(n.hi[a]));
+                let (rc0, rc1) = (b.lo[c].max(n.lo[c]), b.hi[c].min(n.hi[c]));
+                // The face between voxel (at - 1) and (at) along k, at (i, j).
+                let open = |i: usize, j: usize| {
                     let mut p = [0; 3];
-                    p[k] = at;
+                    p[k] = at - 1;
                     p[a] = i;
                     p[c] = j;
-                    g.voxel_min(p)
+                    !v.face_closed(g.index(p[0], p[1], p[2]), k)
                 };
-                // Clockwise seen from the normal's tip, as qbsp's windings.
-                let winding = Winding::new(vec![
-                    corner(a0, c1),
-                    corner(a1, c1),
-                    corner(a1, c0),
-                    corner(a0, c0),
-                ]);
-                let mut normal = DVec3::ZERO;
-                normal[k] = 1.0;
-                let plane = Plane::new(normal, g.voxel_min([at; 3])[k]);
-                out.push(Portal {
-                    winding,
-                    plane,
-                    cells: [id as u32, o],
-                });
+                for [a0, a1, c0, c1] in open_rectangles(ra0, ra1, rc0, rc1, open) {
+                    let corner = |i: usize, j: usize| {
+                        let mut p = [0; 3];
+                        p[k] = at;
+                        p[a] = i;
+                        p[c] = j;
+                        g.voxel_min(p)
+                    };
+                    // Clockwise seen from the normal's tip, as qbsp's windings.
+                    let winding = Winding::new(vec![
+                        corner(a0, c1),
+                        corner(a1, c1),
+                        corner(a1, c0),
+                        corner(a0, c0),
+                    ]);
+                    let mut normal = DVec3::ZERO;
+                    normal[k] = 1.0;
+                    let plane = Plane::new(normal, g.voxel_min([at; 3])[k]);
+                    out.push(Portal {
+                        winding,
+                        plane,
+                        cells: [id as u32, o],
+                    });
+                }
             }
+        }
+    }
+    out
+}
+
+/// The open faces of the rectangle `[a0, a1) × [c0, c1)` as rectangles `[a0, a1, c0,
+/// c1]` that cover them exactly (greedy: rows along `a`, then grown along `c`).
+fn open_rectangles(
+    a0: usize,
+    a1: usize,
+    c0: usize,
+    c1: usize,
+    open: impl Fn(usize, usize) -> bool,
+) -> Vec<[usize; 4]> {
+    let (w, h) = (a1 - a0, c1 - c0);
+    let cells: Vec<bool> = (0..w * h).map(|q| open(a0 + q % w, c0 + q / w)).collect();
+    if cells.iter().all(|&x| x) {
+        return vec![[a0, a1, c0, c1]];
+    }
+    let mut used = vec![false; w * h];
+    let mut out = Vec::new();
+    for j in 0..h {
+        for i in 0..w {
+            if !cells[j * w + i] || used[j * w + i] {
+                continue;
+            }
+            let mut i1 = i + 1;
+            while i1 < w && cells[j * w + i1] && !used[j * w + i1] {
+                i1 += 1;
+            }
+            let mut j1 = j + 1;
+            while j1 < h && (i..i1).all(|x| cells[j1 * w + x] && !used[j1 * w + x]) {
+                j1 += 1;
+            }
+            for y in j..j1 {
+                for x in i..i1 {
+                    used[y * w + x] = true;
+                }
+            }
+            out.push([a0 + i, a0 + i1, c0 + j, c0 + j1]);
         }
     }
     out

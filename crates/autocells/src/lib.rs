@@ -22,6 +22,7 @@
 //! ```
 
 pub mod cells;
+pub mod faces;
 pub mod judge;
 pub mod testlevel;
 pub mod voxels;
@@ -169,19 +170,8 @@ impl AutoCells {
                 extent: longest,
             });
         }
-        let mut h = asked;
-        let dims_for = |h: f64| extent.to_array().map(|e| (e / h).ceil() as usize + 2);
-        while dims_for(h).iter().product::<usize>() > opts.max_voxels.max(27) {
-            h *= 1.05;
-        }
-        // One voxel of padding: the border layer lies outside the bounding box (rule 3
-        // makes it solid) and the box's faces fall on voxel faces, so a wall that ends
-        // at the box holds solid voxels up to it.
-        let grid = Grid {
-            origin: b.min - DVec3::splat(h),
-            size: h,
-            dims: dims_for(h),
-        };
+        let grid = lattice_grid(b.min, b.max, asked, opts.max_voxels);
+        let h = grid.size;
         let voxels = voxels::voxelize_with(grid, &tris, opts.backface_tolerance, opts.axis_rule);
         let seconds_voxels = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
@@ -365,17 +355,36 @@ pub const GROUP_ABOVE: usize = 2000;
 /// Clusters hold at most this many triangles.
 pub const MAX_CLUSTER_TRIANGLES: usize = 2048;
 
+/// The voxel grid of a level: on the world's lattice of multiples of `h` (origin
+/// included), `h` = `asked` doubled while the grid exceeds `max_voxels`. Levels are
+/// built on power-of-two grids, so their walls fall on voxel faces and close them
+/// ([`faces`]). One layer of padding: the border layer lies outside the bounding box
+/// (rule 3).
+pub fn lattice_grid(min: DVec3, max: DVec3, asked: f64, max_voxels: usize) -> Grid {
+    let lattice = |h: f64| {
+        let lo = (min / h).floor() - DVec3::ONE;
+        let hi = (max / h).ceil() + DVec3::ONE;
+        (lo * h, (hi - lo).to_array().map(|d| d as usize))
+    };
+    let mut h = asked;
+    while lattice(h).1.iter().product::<usize>() > max_voxels.max(27) {
+        h *= 2.0;
+    }
+    let (origin, dims) = lattice(h);
+    Grid {
+        origin,
+        size: h,
+        dims,
+    }
+}
+
 /// The cluster grid's side: 16 × the smallest hole the voxel budget allows for this
 /// scene (rooms-sized on a level, a few metres in a metric scene).
 pub fn default_cluster_size(scene: &Scene, opts: &Options) -> f64 {
-    let extent = scene.bounds.max - scene.bounds.min;
-    let mut h = opts.smallest_hole.unwrap_or(0.5);
-    if !(h.is_finite() && h > 0.0 && extent.is_finite()) {
+    let b = scene.bounds;
+    let h = opts.smallest_hole.unwrap_or(0.5);
+    if !(h.is_finite() && h > 0.0 && b.min.is_finite() && b.max.is_finite()) {
         return 4.0;
     }
-    let dims = |h: f64| extent.to_array().map(|e| (e / h).ceil() as usize + 2);
-    while dims(h).iter().product::<usize>() > opts.max_voxels.max(27) {
-        h *= 1.05;
-    }
-    16.0 * h
+    16.0 * lattice_grid(b.min, b.max, h, opts.max_voxels).size
 }

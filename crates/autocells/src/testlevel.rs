@@ -185,3 +185,46 @@ pub fn thin_wall() -> Scene {
     ));
     Scene::from_objects(scene.objects)
 }
+
+/// One room (16 × 8 × 6 voxels of 0.5) split in two by a wall of zero thickness: one
+/// quad at x = `wall_x` (two triangles), floor to ceiling, wall to wall; a crate on
+/// each side. On the lattice (`wall_x` a multiple of 0.5) the wall closes the voxel
+/// faces it lies in; off it, it closes nothing. (Crates are placed from the room's
+/// corner, as in [`lattice_level`]: crate-w at x = −3, crate-e at x = 2.5.)
+pub fn paper_wall(wall_x: f64) -> Scene {
+    let mut scene = lattice_level(
+        0.5,
+        [16, 8, 6],
+        DVec3::new(-4.0, -2.0, 0.0),
+        |_, _, _| true,
+        &[
+            (
+                "crate-w",
+                DVec3::new(1.0, 3.0, 0.0),
+                DVec3::new(1.5, 3.5, 0.5),
+            ),
+            (
+                "crate-e",
+                DVec3::new(6.5, 3.0, 0.0),
+                DVec3::new(7.0, 3.5, 0.5),
+            ),
+        ],
+    );
+    let mut wall = Mesh::default();
+    push_quad(
+        &mut wall,
+        [
+            DVec3::new(wall_x, -2.0, 0.0),
+            DVec3::new(wall_x, 2.0, 0.0),
+            DVec3::new(wall_x, 2.0, 3.0),
+            DVec3::new(wall_x, -2.0, 3.0),
+        ],
+    );
+    scene.objects.push(Object::mesh(
+        Some("paper-wall".into()),
+        wall,
+        vec![],
+        vec![],
+    ));
+    Scene::from_objects(scene.objects)
+}

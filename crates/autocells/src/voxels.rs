@@ -110,6 +110,8 @@ pub struct VoxelStats {
     pub solid_components: usize,
     /// Triangles skipped: zero area or not finite.
     pub degenerate_triangles: usize,
+    /// Voxel faces inside an axis-aligned polygon of the surface (closed to sight).
+    pub closed_faces: usize,
 }
 
 /// A level that leaks: the outside sees the back of the geometry yet reaches a voxel
@@ -141,11 +143,17 @@ pub struct Voxels {
     /// the level (voxels in the void around it, which meet only backs or nothing, are
     /// not).
     pub sees_front: Vec<bool>,
+    /// Bit `k`: the face towards the `+k` neighbour is closed ([`crate::faces`]).
+    pub closed: Vec<u8>,
 }
 
 impl Voxels {
     pub fn triangles_in(&self, v: usize) -> &[u32] {
         &self.tri_of[self.start[v] as usize..self.start[v + 1] as usize]
+    }
+    /// Whether the face between voxel `v` and its `+k` neighbour is closed.
+    pub fn face_closed(&self, v: usize, k: usize) -> bool {
+        self.closed[v] & (1 << k) != 0
     }
     pub fn is_open(&self, v: usize) -> bool {
         self.state[v] != SOLID
@@ -259,6 +267,8 @@ pub fn voxelize_with(
             a
         });
     stats.degenerate_triangles = tris.iter().filter(|t| !is_proper(t)).count();
+    let closed = crate::faces::closed_faces(&grid, tris);
+    stats.closed_faces = closed.iter().map(|b| b.count_ones() as usize).sum();
     pairs.par_sort_unstable();
     let mut start = vec![0u32; n + 1];
     for &(v, _) in &pairs {
@@ -410,6 +420,7 @@ pub fn voxelize_with(
         stats,
         leak,
         sees_front,
+        closed,
     }
 }
 

@@ -90,3 +90,72 @@ fn open_room_leaks_from_inside_to_the_void() {
         assert!((d.length() - v.grid.size).abs() < 1e-9, "face neighbours");
     }
 }
+
+/// A random point of a closed face's inside is inside some triangle of the soup (so a
+/// line through the face crosses that triangle): quads on lattice planes, split into
+/// two triangles along either diagonal, with random triangles beside them.
+mod closed_faces {
+    use super::*;
+    use sightline_autocells::faces::closed_faces;
+
+    fn in_triangle(t: &[DVec3; 3], p: DVec3) -> bool {
+        let n = (t[1] - t[0]).cross(t[2] - t[0]);
+        if n.dot(p - t[0]).abs() > 1e-9 * n.length() {
+            return false;
+        }
+        (0..3).all(|i| {
+            let (a, b) = (t[i], t[(i + 1) % 3]);
+            (b - a).cross(p - a).dot(n) >= -1e-9 * n.length_squared()
+        })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        #[test]
+        fn a_closed_face_lies_inside_a_triangle(
+            quads in prop::collection::vec((0usize..3, 2usize..20, 2usize..20, 2usize..20, 1usize..6, 1usize..6, any::<bool>()), 1..6),
+            tris in prop::collection::vec((point(), point(), point()), 0..4),
+            (u, w) in (0.0..1.0f64, 0.0..1.0f64),
+        ) {
+            let g = grid();
+            let mut soup: Vec<[DVec3; 3]> = tris.iter().map(|&(a, b, c)| [a, b, c]).collect();
+            for &(k, m, i, j, di, dj, diag) in &quads {
+                let (a, c) = ((k + 1) % 3, (k + 2) % 3);
+                let at = |x: usize, y: usize| {
+                    let mut p = [0usize; 3];
+                    p[k] = m;
+                    p[a] = x;
+                    p[c] = y;
+                    g.voxel_min(p)
+                };
+                let q = [at(i, j), at(i + di, j), at(i + di, j + dj), at(i, j + dj)];
+                if diag {
+                    soup.push([q[0], q[1], q[2]]);
+                    soup.push([q[0], q[2], q[3]]);
+                } else {
+                    soup.push([q[0], q[1], q[3]]);
+                    soup.push([q[1], q[2], q[3]]);
+                }
+            }
+            let closed = closed_faces(&g, &soup);
+            let mut quad_faces = 0;
+            for (v, &bits) in closed.iter().enumerate() {
+                for k in 0..3 {
+                    if bits & (1 << k) == 0 {
+                        continue;
+                    }
+                    let (a, c) = ((k + 1) % 3, (k + 2) % 3);
+                    let mut p = g.voxel_min(g.coords(v));
+                    p[k] += g.size;
+                    p[a] += u * g.size;
+                    p[c] += w * g.size;
+                    prop_assert!(soup.iter().any(|t| in_triangle(t, p)), "face {v}/{k} at {p:?}");
+                }
+                quad_faces += bits.count_ones() as usize;
+            }
+            // Every face of every quad closes (quads split either way are found).
+            let largest = quads.iter().map(|&(_, _, _, _, di, dj, _)| di * dj).max().unwrap_or(0);
+            prop_assert!(quad_faces >= largest);
+        }
+    }
+}
