@@ -330,7 +330,7 @@ pub enum Command {
         /// Eye height above the ground or floor, in scene units (default: 1.7 in a city;
         /// 46 in a BSP level, a Quake player's eye above the floor; in a mesh level the
         /// larger of 1.7 and 2.5 × the smallest hole, so that the eye is in free space).
-        #[arg(long)]
+        #[arg(long, allow_hyphen_values = true)]
         eye_height: Option<f64>,
         /// Mesh levels: the smallest hole of the voxelization, in scene units (as `build`).
         #[arg(long)]

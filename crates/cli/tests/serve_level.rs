@@ -74,10 +74,10 @@ fn serve_dm1_answers_the_scene_and_a_cells_pvs() {
     assert_eq!(scene["source"], "memory");
     let cells = scene["cells"].as_u64().unwrap();
     assert!(cells > 100, "{cells} cells");
-    // The start: dm1's info_player_start (-48, 1060, 120), at the eye (+22).
-    assert_eq!(scene["start"], serde_json::json!([-48.0, 1060.0, 142.0]));
+    // The start: dm1's info_player_start (324, 1156, 24), at the eye (+22).
+    assert_eq!(scene["start"], serde_json::json!([324.0, 1156.0, 46.0]));
 
-    let (code, pvs) = get(addr, "/api/pvs?at=-48,1060,142");
+    let (code, pvs) = get(addr, "/api/pvs?at=324,1156,46");
     assert_eq!(code, 200, "{pvs}");
     assert_eq!(pvs["method"], "portals-fast");
     let visible: Vec<u64> = serde_json::from_value(pvs["visible"].clone()).unwrap();
@@ -87,7 +87,7 @@ fn serve_dm1_answers_the_scene_and_a_cells_pvs() {
         "pvs",
         &dm1(),
         "--at",
-        "-48,1060,142",
+        "324,1156,46",
         "--method",
         "portals-fast",
         "--json",
