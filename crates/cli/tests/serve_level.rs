@@ -51,7 +51,11 @@ fn serve(args: &[&str]) -> (Serve, String) {
 
 fn get(addr: &str, path: &str) -> (u16, serde_json::Value) {
     let mut s = TcpStream::connect(addr).unwrap();
-    write!(s, "GET {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n").unwrap();
+    write!(
+        s,
+        "GET {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n"
+    )
+    .unwrap();
     let mut buf = vec![];
     s.read_to_end(&mut buf).unwrap();
     let text = String::from_utf8_lossy(&buf).into_owned();
@@ -64,7 +68,10 @@ fn get(addr: &str, path: &str) -> (u16, serde_json::Value) {
 fn serve_dm1_answers_the_scene_and_a_cells_pvs() {
     let (_server, out) = serve(&["serve", &dm1()]);
     let (line, addr) = out.split_once('|').unwrap();
-    assert!(line.contains("method portals-fast (memory, conservative)"), "{line}");
+    assert!(
+        line.contains("method portals-fast (memory, conservative)"),
+        "{line}"
+    );
     let (code, scene) = get(addr, "/api/scene");
     assert_eq!(code, 200);
     assert_eq!(scene["kind"], "level");
@@ -111,7 +118,14 @@ fn serve_on_a_level_refuses_bad_input_in_one_line() {
     assert_eq!(code, 0, "{err}");
     let pvs = dir.path().join("c.pvs");
     let cells = dir.path().join("c.json");
-    let (code, _, err) = sightline(&["cells", city, "--size", "100", "-o", cells.to_str().unwrap()]);
+    let (code, _, err) = sightline(&[
+        "cells",
+        city,
+        "--size",
+        "100",
+        "-o",
+        cells.to_str().unwrap(),
+    ]);
     assert_eq!(code, 0, "{err}");
     let (code, _, err) = sightline(&[
         "build",
@@ -141,5 +155,56 @@ fn serve_on_a_level_refuses_bad_input_in_one_line() {
             code != 0 && lines.len() == 1 && lines[0].starts_with("error: "),
             "{args:?}: exit {code}, stderr {err:?}"
         );
+    }
+}
+
+#[test]
+fn serve_a_mesh_level_in_memory_and_from_its_pvs() {
+    use sightline_autocells::testlevel::two_rooms_and_a_door;
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("rooms.obj");
+    let mut f = std::fs::File::create(&obj).unwrap();
+    sightline_scene::export::write_obj(&two_rooms_and_a_door(0.0), &mut f).unwrap();
+    let obj = obj.to_string_lossy().into_owned();
+    let pvs = dir.path().join("rooms.pvs").to_string_lossy().into_owned();
+    let (code, _, err) = sightline(&[
+        "build",
+        &obj,
+        "--method",
+        "portals-fast",
+        "--smallest-hole",
+        "0.45",
+        "-o",
+        &pvs,
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (code, q, err) = sightline(&["query", &pvs, "--at=-3,-2,1.5", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let q: serde_json::Value = serde_json::from_str(&q).unwrap();
+    let clusters = sightline_pvs::PvsFile::open(&pvs)
+        .unwrap()
+        .header()
+        .object_count;
+    for args in [
+        vec!["serve", &obj, "--smallest-hole", "0.45"],
+        vec!["serve", &obj, "--pvs", &pvs],
+    ] {
+        let (_server, out) = serve(&args);
+        let (line, addr) = out.split_once('|').unwrap();
+        assert!(line.contains("method portals-fast"), "{line}");
+        let (code, scene) = get(addr, "/api/scene");
+        assert_eq!(code, 200);
+        assert_eq!(scene["kind"], "level");
+        assert_eq!(scene["layout"], "cells");
+        // The clusters are the objects served.
+        assert_eq!(scene["objects"], clusters, "{args:?}");
+        // Smallest hole 0.45: the eye at 1.7 (above 2.5 × 0.45).
+        assert_eq!(scene["eye_height"], 1.7);
+        assert!(scene["start"].is_array());
+        let (code, v) = get(addr, "/api/pvs?at=-3,-2,1.5");
+        assert_eq!(code, 200, "{v}");
+        assert_eq!(v["visible"], q["visible"], "{args:?}");
+        assert_eq!(v["cell_id"], q["index"], "{args:?}");
     }
 }

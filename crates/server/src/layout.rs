@@ -19,7 +19,6 @@
 //! * the **length scale** is the median of the cells' larger horizontal side.
 
 use crate::grid::{CellGrid, CellId, PointError};
-use serde::Serialize;
 use sightline_geom::{DVec2, DVec3, ViewCell};
 
 /// A source's cells, borrowed.
@@ -95,11 +94,9 @@ impl Layout<'_> {
 }
 
 /// Cells given by their bounding boxes, with the adjacency of those boxes.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct CellSet {
-    #[serde(skip)]
     boxes: Vec<ViewCell>,
-    #[serde(skip)]
     adjacent: Vec<Vec<CellId>>,
     /// Median of the cells' larger horizontal side.
     pub scale_m: f64,
@@ -293,8 +290,14 @@ mod tests {
         assert!(q.x > 20.0 && q.x < 20.1 && q.y == 5.0 && q.z == 2.0, "{q}");
         assert_eq!(s.locate_box(q), Ok(2));
         assert_eq!(s.exit_point(1, p, DVec2::ZERO), None);
-        assert_eq!(s.locate_box(DVec3::new(50.0, 5.0, 1.0)), Err(PointError::NoCell(50.0, 5.0, 1.0)));
-        assert_eq!(s.locate_box(DVec3::new(f64::NAN, 5.0, 1.0)), Err(PointError::NotFinite));
+        assert_eq!(
+            s.locate_box(DVec3::new(50.0, 5.0, 1.0)),
+            Err(PointError::NoCell(50.0, 5.0, 1.0))
+        );
+        assert_eq!(
+            s.locate_box(DVec3::new(f64::NAN, 5.0, 1.0)),
+            Err(PointError::NotFinite)
+        );
     }
 
     #[test]

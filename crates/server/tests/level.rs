@@ -83,13 +83,7 @@ fn dm1_served() -> (Dm1, FileSource) {
                 .collect()
         })
         .collect();
-    let header = Header::new(
-        scene.fingerprint(),
-        "vis",
-        vec![],
-        scene.len(),
-        cells.len(),
-    );
+    let header = Header::new(scene.fingerprint(), "vis", vec![], scene.len(), cells.len());
     let present: Vec<u32> = (0..cells.len() as u32).collect();
     let bytes = encode_cells_with_leaves(
         &header,

@@ -467,12 +467,23 @@ function drawMap() {
   mapCtx.fillRect(0, 0, W, H);
   const n = S.boxes.length / 6;
   const half = span / 2 + S.scale / 2;
+  // In a level, a plan at the walker's height: what crosses the band from the feet to the
+  // eye (walls), not the floors below nor the ceilings above.
+  const feet = S.pos.z - S.eye;
   for (let id = 0; id < n; id++) {
     const b = id * 6;
+    if (S.level && (S.boxes[b + 5] < feet + 0.25 * S.eye || S.boxes[b + 2] > S.pos.z)) continue;
     if (S.boxes[b + 3] < S.pos.x - half || S.boxes[b] > S.pos.x + half || S.boxes[b + 4] < S.pos.y - half || S.boxes[b + 1] > S.pos.y + half) continue;
-    mapCtx.fillStyle = S.displaySet.has(id) ? '#4f8cff' : '#d9453b';
     const x0 = tx(S.boxes[b]), y0 = ty(S.boxes[b + 4]);
-    mapCtx.fillRect(x0, y0, Math.max(1, (S.boxes[b + 3] - S.boxes[b]) * k), Math.max(1, (S.boxes[b + 4] - S.boxes[b + 1]) * k));
+    const w = Math.max(1, (S.boxes[b + 3] - S.boxes[b]) * k), h = Math.max(1, (S.boxes[b + 4] - S.boxes[b + 1]) * k);
+    if (S.level) {
+      // A level's faces overlap in plan: outlines.
+      mapCtx.strokeStyle = S.displaySet.has(id) ? '#4f8cff' : '#d9453b';
+      mapCtx.strokeRect(x0, y0, w, h);
+    } else {
+      mapCtx.fillStyle = S.displaySet.has(id) ? '#4f8cff' : '#d9453b';
+      mapCtx.fillRect(x0, y0, w, h);
+    }
   }
   // Held cells dashed, the current viewcell in green.
   mapCtx.setLineDash([3, 3]);

@@ -653,7 +653,10 @@ pub fn player_start(data: &[u8]) -> Option<[f64; 3]> {
             match kv {
                 ["classname", v] => class = Some(*v),
                 ["origin", v] => {
-                    let n: Vec<f64> = v.split_whitespace().filter_map(|x| x.parse().ok()).collect();
+                    let n: Vec<f64> = v
+                        .split_whitespace()
+                        .filter_map(|x| x.parse().ok())
+                        .collect();
                     if let [x, y, z] = n[..] {
                         origin = finite3([x, y, z], "origin").ok();
                     }

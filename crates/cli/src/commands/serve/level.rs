@@ -168,7 +168,10 @@ fn source(
     pvs: Option<&Path>,
     in_memory: bool,
 ) -> anyhow::Result<FileSource> {
-    let what = pvs.map_or_else(|| "the level's PVS".to_string(), |p| p.display().to_string());
+    let what = pvs.map_or_else(
+        || "the level's PVS".to_string(),
+        |p| p.display().to_string(),
+    );
     let src = FileSource::cells(file, scene).with_context(|| format!("cannot serve {what}"))?;
     Ok(if in_memory { src.in_memory() } else { src })
 }
