@@ -129,7 +129,11 @@ function resize() {
 window.addEventListener('resize', resize);
 resize();
 
+// A level's faces: stone, both sides (a BSP face is one-sided, seen from its front).
+const matLevel = new THREE.MeshLambertMaterial({ color: 0xb8aa94, flatShading: true, side: THREE.DoubleSide });
+
 function materialFor(kind) {
+  if (S.level) return matLevel;
   return kind === 1 ? matFlat : kind === 2 ? matMesh : matBlocks;
 }
 
