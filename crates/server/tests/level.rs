@@ -301,3 +301,14 @@ async fn a_walk_session_follows_the_walker_from_leaf_to_leaf() {
     assert!(client.errors.iter().all(|e| e.contains("no cell")));
     s.stop().await.unwrap();
 }
+
+#[test]
+fn a_file_of_another_scene_is_refused() {
+    let (d, _) = dm1_served();
+    let other = Scene::from_objects(d.scene.objects[..10].to_vec());
+    let err = FileSource::cells(d.file, &other).err().unwrap();
+    assert!(
+        matches!(err, sightline_server::source::FileSourceError::Pvs(_)),
+        "{err}"
+    );
+}
