@@ -317,14 +317,28 @@ pub enum Command {
     Serve {
         #[command(flatten)]
         scene: SceneArg,
+        /// A .pvs of the scene to serve (`build` writes one); also `--pvs`.
         pvs: Option<PathBuf>,
+        /// The .pvs to serve (same as the positional argument).
+        #[arg(long = "pvs", value_name = "PVS", conflicts_with = "pvs")]
+        pvs_flag: Option<PathBuf>,
         #[arg(long, default_value = "127.0.0.1:8080")]
         addr: String,
         #[arg(long, default_value_t = 100.0)]
         cell_size: f64,
-        /// The on-line method (listed below).
-        #[arg(long, default_value = "dual-ray")]
-        method: String,
+        /// The method (listed below). A city: the on-line method of its grid cells
+        /// (default dual-ray). A level (.bsp, .obj, .gltf, .glb): the portal method its
+        /// PVS is built with in memory before serving (default portals-fast).
+        #[arg(long)]
+        method: Option<String>,
+        /// Eye height above the ground or floor, in scene units (default: 1.7 in a city;
+        /// 46 in a BSP level, a Quake player's eye above the floor; in a mesh level the
+        /// larger of 1.7 and 2.5 × the smallest hole, so that the eye is in free space).
+        #[arg(long, allow_hyphen_values = true)]
+        eye_height: Option<f64>,
+        /// Mesh levels: the smallest hole of the voxelization, in scene units (as `build`).
+        #[arg(long)]
+        smallest_hole: Option<f64>,
         /// Require this token (`?token=` or `Authorization: Bearer`).
         #[arg(long)]
         token: Option<String>,

@@ -6,9 +6,11 @@
 //
 // Environment:
 //   SIGHTLINE_BIN   the binary (default: <repo>/target/debug/sightline)
-//   E2E_SCENE       scene file (default: <repo>/data/lyon1_bdtopo.geojson)
+//   E2E_SCENE       scene file (default: <repo>/data/lyon1_bdtopo.geojson; '' skips the city)
 //   E2E_METHOD      on-line method (default: dual-ray, the fastest conservative one)
 //   E2E_CELL_SIZE   viewcell size in metres (default: 100)
+//   E2E_LEVEL       a level walked after the city (default: <repo>/data/quake/dm1.bsp,
+//                   served with its PVS built in memory by portals-fast; '' skips it)
 //   CHROMIUM        browser executable (default: /usr/bin/chromium)
 import { mkdirSync } from 'node:fs';
 import { dirname, join, resolve } from 'node:path';
@@ -20,9 +22,10 @@ import { startServer } from './serve.mjs';
 const here = dirname(fileURLToPath(import.meta.url));
 const repo = resolve(here, '../../..');
 const bin = process.env.SIGHTLINE_BIN || join(repo, 'target/debug/sightline');
-const sceneFile = process.env.E2E_SCENE || join(repo, 'data/lyon1_bdtopo.geojson');
+const sceneFile = process.env.E2E_SCENE ?? join(repo, 'data/lyon1_bdtopo.geojson');
 const method = process.env.E2E_METHOD || 'dual-ray';
 const cellSize = Number(process.env.E2E_CELL_SIZE || 100);
+const levelFile = process.env.E2E_LEVEL ?? join(repo, 'data/quake/dm1.bsp');
 const outDir = join(here, 'out');
 mkdirSync(outDir, { recursive: true });
 
@@ -40,7 +43,35 @@ async function getJson(base, path) {
   return body;
 }
 
+function launchBrowser() {
+  return chromium.launch({
+    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+    headless: true,
+    args: [
+      '--no-sandbox', '--no-first-run', '--disable-background-networking', '--disable-component-update',
+      '--disable-sync', '--disable-quic', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+      '--ignore-gpu-blocklist',
+    ],
+  });
+}
+
+/** Stop a server with SIGTERM; its exit status ('killed' if it would not stop). */
+function stopServer(proc) {
+  return new Promise((res) => {
+    if (proc.exitCode !== null) return res(proc.exitCode);
+    proc.on('exit', (c) => res(c));
+    proc.kill('SIGTERM');
+    setTimeout(() => { proc.kill('SIGKILL'); res('killed'); }, 20_000);
+  });
+}
+
 async function main() {
+  let failed = sceneFile ? await cityWalk() : false;
+  if (!failed && levelFile) failed = await levelWalk();
+  process.exit(failed ? 1 : 0);
+}
+
+async function cityWalk() {
   const { proc, url } = startWalkServer();
   let browser;
   let failed = false;
@@ -51,15 +82,7 @@ async function main() {
     log(`scene: ${scene.objects} objects, ${scene.cells} cells (${scene.grid.nx}×${scene.grid.ny} of ${scene.grid.cell_size_m} m), method ${scene.method}`);
     assert.equal(scene.method, method);
 
-    browser = await chromium.launch({
-      executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-      headless: true,
-      args: [
-        '--no-sandbox', '--no-first-run', '--disable-background-networking', '--disable-component-update',
-        '--disable-sync', '--disable-quic', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
-        '--ignore-gpu-blocklist',
-      ],
-    });
+    browser = await launchBrowser();
     const page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
     const pageErrors = [];
     page.on('pageerror', (e) => pageErrors.push(String(e)));
@@ -152,18 +175,110 @@ async function main() {
   } finally {
     if (browser) await browser.close();
     // Graceful shutdown on SIGTERM: the server must exit 0.
-    const code = await new Promise((res) => {
-      if (proc.exitCode !== null) return res(proc.exitCode);
-      proc.on('exit', (c) => res(c));
-      proc.kill('SIGTERM');
-      setTimeout(() => { proc.kill('SIGKILL'); res('killed'); }, 20_000);
-    });
+    const code = await stopServer(proc);
     if (code !== 0) {
       console.error(`[e2e] FAILED: server exit status ${code} after SIGTERM`);
       failed = true;
     }
   }
-  process.exit(failed ? 1 : 0);
+  return failed;
+}
+
+// A level (dm1): the viewer starts at the level's start, walks to points of open space
+// around it (each drawn set must be the server's PVS of the leaf there), then walks with
+// the keyboard on the floors, the eye at the level's eye height above them.
+async function levelWalk() {
+  const { proc, url } = startServer(bin, ['serve', levelFile, '--addr', '127.0.0.1:0'], { log, timeoutMs: 600_000, echoStderr: true });
+  let browser;
+  let failed = false;
+  try {
+    const base = (await url).replace(/\/$/, '');
+    const scene = await getJson(base, '/api/scene');
+    log(`level: ${scene.objects} objects, ${scene.cells} cells (${scene.layout}), method ${scene.method} (${scene.source}), eye ${scene.eye_height}, start ${scene.start}`);
+    assert.equal(scene.kind, 'level');
+    assert.equal(scene.layout, 'cells');
+    assert.ok(Array.isArray(scene.start), 'a start position');
+    browser = await launchBrowser();
+    const page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
+    const pageErrors = [];
+    page.on('pageerror', (e) => pageErrors.push(String(e)));
+    page.on('console', (m) => { if (m.type() === 'error') pageErrors.push(m.text()); });
+    await page.goto(base + '/');
+    await page.evaluate(() => window.sightline.ready);
+    const [sx, sy, sz] = scene.start;
+    // Points of open space around the start, 40 units apart along x and y (those the
+    // server locates in a cell).
+    const path = [[sx, sy, sz]];
+    for (const [dx, dy] of [[1, 0], [-1, 0], [0, 1], [0, -1]]) {
+      for (let k = 1; k <= 4; k++) {
+        const p = [sx + 40 * k * dx, sy + 40 * k * dy, sz];
+        const r = await fetch(`${base}/api/pvs?at=${p.join(',')}`);
+        if (!r.ok) break; // a wall: the next points of this line are beyond it
+        path.push(p);
+      }
+    }
+    const cells = new Set();
+    for (const [x, y, z] of path) {
+      const r = await page.evaluate(([px, py, pz]) => window.sightline.walkTo(px, py, pz), [x, y, z]);
+      const at = await page.evaluate(() => window.sightline.position());
+      const truth = await getJson(base, `/api/pvs?at=${at.join(',')}`);
+      assert.equal(r.cell, truth.cell_id, `at (${at}): the page's cell`);
+      assert.deepEqual(r.drawn, truth.visible, `at (${at}): drawn != PVS`);
+      if (!cells.has(r.cell)) {
+        cells.add(r.cell);
+        await page.evaluate(() => window.sightline.render());
+        await page.screenshot({ path: join(outDir, `level-cell-${String(cells.size).padStart(2, '0')}-${r.cell}.png`) });
+        log(`level cell ${r.cell}: ${r.drawn.length} faces drawn = PVS (of ${scene.objects})`);
+      }
+    }
+    assert.ok(cells.size >= 3, `walked across ${cells.size} level cells only`);
+
+    // The keyboard walks on the floors: from the start, Shift+W for half a second in four
+    // headings (a wall may stop some of them).
+    // Back to the start, standing on the floor below it.
+    await page.evaluate(([x, y, z]) => window.sightline.walkTo(x, y, z), scene.start);
+    await page.evaluate(([x, y]) => window.sightline.walkTo(x, y), scene.start);
+    let moved = 0;
+    for (const yaw of [0, 90, 180, 270]) {
+      await page.evaluate(([a]) => window.sightline.look(a, 0), [yaw]);
+      const before = await page.evaluate(() => window.sightline.position());
+      await page.keyboard.down('Shift');
+      await page.keyboard.down('KeyW');
+      await page.waitForTimeout(500);
+      await page.keyboard.up('KeyW');
+      await page.keyboard.up('Shift');
+      const after = await page.evaluate(() => window.sightline.position());
+      moved += Math.hypot(after[0] - before[0], after[1] - before[1]);
+      const floor = await page.evaluate(() => window.sightline.floor());
+      assert.ok(floor !== null, `no floor under (${after})`);
+      assert.ok(Math.abs(after[2] - floor - scene.eye_height) < 1e-3 * scene.eye_height + 0.01,
+        `eye at ${after[2]}, floor ${floor}: not ${scene.eye_height} above it`);
+    }
+    assert.ok(moved > scene.eye_height / 2, `W did not move the viewer (moved ${moved})`);
+    const at = await page.evaluate(() => window.sightline.position());
+    const r = await page.evaluate(([x, y, z]) => window.sightline.walkTo(x, y, z), at);
+    const truth = await getJson(base, `/api/pvs?at=${at.join(',')}`);
+    assert.deepEqual(r.drawn, truth.visible, 'after walking with the keyboard');
+    await page.evaluate(() => window.sightline.look(0, -5));
+    await page.evaluate(() => window.sightline.render());
+    await page.screenshot({ path: join(outDir, 'level-final.png') });
+    const stats = await page.evaluate(() => window.sightline.stats());
+    log('level viewer stats', JSON.stringify(stats));
+    assert.equal(stats.errors, 0, `viewer errors: ${stats.lastError}`);
+    assert.deepEqual(pageErrors, [], 'page errors');
+    log(`OK: level walk over ${cells.size} cells, drawn == PVS at every step; moved ${moved.toFixed(0)} units with the keyboard`);
+  } catch (e) {
+    failed = true;
+    console.error('[e2e] FAILED (level):', e && e.stack ? e.stack : e);
+  } finally {
+    if (browser) await browser.close();
+    const code = await stopServer(proc);
+    if (code !== 0) {
+      console.error(`[e2e] FAILED: level server exit status ${code} after SIGTERM`);
+      failed = true;
+    }
+  }
+  return failed;
 }
 
 main();

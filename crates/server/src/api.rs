@@ -50,12 +50,19 @@ async fn scene(State(s): State<Arc<AppState>>) -> Response {
     let src = s.source();
     let info = src.info();
     let b = s.scene.bounds;
+    let layout = src.layout();
+    let view = &s.config.view;
     Json(json!({
         "objects": s.scene.objects.len(),
         "bounds": [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z],
         "origin": [s.origin.x, s.origin.y, s.origin.z],
-        "grid": src.grid(),
-        "cells": src.grid().len(),
+        "grid": layout.grid(),
+        "cells": layout.len(),
+        "layout": layout.kind(),
+        "cell_scale": layout.scale_m(),
+        "kind": view.kind,
+        "eye_height": view.eye_height,
+        "start": view.start,
         "method": info.method,
         "conservative": info.conservative,
         "source": info.kind,

@@ -430,8 +430,8 @@ mod tests {
                 params: vec![],
             }
         }
-        fn grid(&self) -> &CellGrid {
-            &self.grid
+        fn layout(&self) -> crate::layout::Layout<'_> {
+            crate::layout::Layout::Grid(&self.grid)
         }
         fn pvs(&self, id: CellId) -> Result<Vec<u32>, SourceError> {
             self.calls.fetch_add(1, Ordering::SeqCst);

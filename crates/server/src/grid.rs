@@ -54,6 +54,8 @@ pub enum PointError {
     NotFinite,
     #[error("point ({0}, {1}, {2}) is outside the scene (x {3}..{4}, y {5}..{6}, z 0..{7})")]
     Outside(f64, f64, f64, f64, f64, f64, f64, f64),
+    #[error("point ({0}, {1}, {2}) is in no cell (inside a wall or outside the level)")]
+    NoCell(f64, f64, f64),
 }
 
 impl CellGrid {

@@ -7,7 +7,8 @@
 //! and of the cells it may enter next — ahead of time, so that the client never waits —
 //! and sends the geometry of each object the first time it becomes potentially visible.
 //!
-//! * [`grid`] — the regular grid of viewcells;
+//! * [`grid`] — the regular grid of viewcells; [`layout`] — a grid, or the free cells of
+//!   a `.pvs` file (a BSP level's leaves, a mesh level's automatic cells);
 //! * [`source`] — where a cell's PVS comes from (a method on-line, or a `.pvs` file);
 //! * [`cache`] — LRU cache and bounded worker pool in front of the source;
 //! * [`geometry`] — the compact binary object geometry (`SLG1`);
@@ -34,6 +35,7 @@ pub mod cache;
 pub mod conn;
 pub mod geometry;
 pub mod grid;
+pub mod layout;
 pub mod limits;
 pub mod source;
 pub mod tiles;
@@ -88,6 +90,33 @@ pub struct ServerConfig {
     pub queue_timeout: Duration,
     /// Longest a `/api/pvs` request waits for its cell's PVS before `503`.
     pub pvs_timeout: Duration,
+    /// What the viewer is told about walking in the scene (`/api/scene`).
+    pub view: ViewSettings,
+}
+
+/// How the viewer walks in the scene, sent in `/api/scene` (the server itself does not
+/// use it: a session accepts any position and locates it).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ViewSettings {
+    /// `"city"`: the walker stays at eye height above the ground z = 0; `"level"`: it
+    /// stands on the highest floor below it (a ray cast down against the geometry it holds).
+    pub kind: &'static str,
+    /// Eye height above the ground or floor, in scene units.
+    pub eye_height: f64,
+    /// Where the viewer starts, in scene coordinates (`None`: the viewer chooses, e.g. a
+    /// free point near a city's centre).
+    pub start: Option<[f64; 3]>,
+}
+
+impl Default for ViewSettings {
+    /// A city: 1.7 m above the ground, start chosen by the viewer.
+    fn default() -> Self {
+        ViewSettings {
+            kind: "city",
+            eye_height: 1.7,
+            start: None,
+        }
+    }
 }
 
 impl Default for ServerConfig {
@@ -111,6 +140,7 @@ impl Default for ServerConfig {
             max_queued: 16_384,
             queue_timeout: Duration::from_secs(10),
             pvs_timeout: Duration::from_secs(30),
+            view: ViewSettings::default(),
         }
     }
 }
@@ -170,8 +200,7 @@ pub struct Server {
 
 impl Server {
     pub fn new(scene: Arc<Scene>, source: SharedSource, config: ServerConfig) -> Self {
-        let g = source.grid();
-        let origin = DVec3::new(g.origin[0], g.origin[1], 0.0);
+        let origin = source.layout().origin();
         let geometry = GeometryStore::new(scene.clone(), origin);
         let boxes = axum::body::Bytes::from(geometry.boxes());
         let cache = PvsCache::new(source, config.cache.clone());

@@ -6,6 +6,7 @@
 //! ([`crate::cache`]) and never asks a source about anything but cells it located itself.
 
 use crate::grid::{CellGrid, CellId, PointError, MAX_CELLS};
+use crate::layout::{CellSet, CellSetError, Layout};
 use serde::Serialize;
 use sightline_geom::{DVec2, DVec3, ViewCell};
 use sightline_methods::VisibilityMethod;
@@ -16,7 +17,8 @@ use std::sync::Arc;
 /// What a source says about itself (shown in `/api/scene`).
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct SourceInfo {
-    /// `"online"` or `"file"`.
+    /// `"online"`, `"file"`, or `"memory"` (a `.pvs` built at start-up and held in
+    /// memory, see [`FileSource::in_memory`]).
     pub kind: &'static str,
     /// The name of the method that produced / produces the sets.
     pub method: String,
@@ -39,18 +41,40 @@ pub enum SourceError {
 pub trait PvsSource: Send + Sync + 'static {
     fn info(&self) -> SourceInfo;
     /// The cell layout: sessions prefetch along it.
-    fn grid(&self) -> &CellGrid;
+    fn layout(&self) -> Layout<'_>;
     /// The cell containing a point.
     fn locate(&self, p: DVec3) -> Result<CellId, PointError> {
-        self.grid().locate(p)
+        match self.layout() {
+            Layout::Grid(g) => g.locate(p),
+            Layout::Cells(c) => c.locate_box(p),
+        }
     }
-    /// The box of a cell.
+    /// The box of a cell (a shaped cell's bounding box).
     fn cell(&self, id: CellId) -> Option<ViewCell> {
-        self.grid().cell(id)
+        self.layout().cell(id)
     }
     /// The cells adjacent to `id`, those ahead along `heading` first.
     fn neighbours(&self, id: CellId, heading: DVec2) -> Vec<CellId> {
-        self.grid().neighbours(id, heading)
+        self.layout().neighbours(id, heading)
+    }
+    /// The cell a client at `p` moving along `heading` enters next, if known: on a grid
+    /// the neighbour across the side the motion leaves through
+    /// ([`CellGrid::next_cell`]); on a cell set the cell holding the point just beyond
+    /// the current cell's box along the motion ([`CellSet::exit_point`]).
+    fn next_cell(&self, p: DVec3, heading: DVec2) -> Option<CellId> {
+        match self.layout() {
+            Layout::Grid(g) => g.next_cell(p.truncate(), heading),
+            Layout::Cells(c) => {
+                let here = self.locate(p).ok()?;
+                let beyond = c.exit_point(here, p, heading)?;
+                self.locate(beyond).ok().filter(|&n| n != here)
+            }
+        }
+    }
+    /// The cell `steps` cells ahead of `id` along `heading` (grids only: a cell set has
+    /// no rows to count along).
+    fn ahead(&self, id: CellId, heading: DVec2, steps: u32) -> Option<CellId> {
+        self.layout().grid()?.ahead(id, heading, steps)
     }
     /// The PVS of a cell: sorted ascending object ids. May take long (on-line methods).
     fn pvs(&self, id: CellId) -> Result<Vec<u32>, SourceError>;
@@ -83,8 +107,8 @@ impl PvsSource for OnlineSource {
         }
     }
 
-    fn grid(&self) -> &CellGrid {
-        &self.grid
+    fn layout(&self) -> Layout<'_> {
+        Layout::Grid(&self.grid)
     }
 
     fn pvs(&self, id: CellId) -> Result<Vec<u32>, SourceError> {
@@ -102,14 +126,30 @@ impl PvsSource for OnlineSource {
     }
 }
 
-/// File source: the sets of a `.pvs` built beforehand (`sightline build`) over a regular
-/// grid of square cells — what `sightline cells` writes. Grid cells the file lacks (the
-/// grid's cells inside buildings, which `cells` drops) answer [`SourceError::NoCell`].
+/// File source: the sets of a `.pvs` built beforehand (`sightline build`), served on
+/// one of two layouts:
+///
+/// * [`FileSource::new`]: a regular grid of square cells — what `sightline cells` writes
+///   for a city. Grid cells the file lacks (the grid's cells inside buildings, which
+///   `cells` drops) answer [`SourceError::NoCell`];
+/// * [`FileSource::cells`]: the file's own cells, whatever their shapes — a BSP level's
+///   leaves (convex cells), a mesh level's automatic cells. Cell `i` is the file's cell
+///   `i`; a point is located as `query --at` locates it ([`PvsFile::locate`]: the
+///   spatial index over the cells' boxes, then the cell's shape), so the cell served is
+///   the one whose PVS `query` answers.
 pub struct FileSource {
     file: PvsFile,
-    grid: CellGrid,
-    /// Grid cell id → index of the file's cell.
-    index: Vec<Option<u32>>,
+    layout: FileLayout,
+    kind: &'static str,
+}
+
+enum FileLayout {
+    Grid {
+        grid: CellGrid,
+        /// Grid cell id → index of the file's cell.
+        index: Vec<Option<u32>>,
+    },
+    Cells(CellSet),
 }
 
 /// Why a `.pvs` file cannot be served.
@@ -125,6 +165,8 @@ pub enum FileSourceError {
     NotAGrid(usize, ViewCell, ViewCell),
     #[error("{0} grid cells would be needed (at most {MAX_CELLS})")]
     TooMany(u64),
+    #[error("{0}")]
+    Cells(#[from] CellSetError),
 }
 
 impl FileSource {
@@ -182,7 +224,41 @@ impl FileSource {
                 _ => return Err(FileSourceError::NotAGrid(i, *c, first)),
             }
         }
-        Ok(FileSource { file, grid, index })
+        Ok(FileSource {
+            file,
+            layout: FileLayout::Grid { grid, index },
+            kind: "file",
+        })
+    }
+
+    /// Open `file` for `scene` on the file's own cells (see [`FileSource`]): it must have
+    /// been built for this scene and be complete.
+    pub fn cells(file: PvsFile, scene: &Scene) -> Result<Self, FileSourceError> {
+        file.check_scene(scene)?;
+        if let Some(sh) = &file.header().shard {
+            return Err(FileSourceError::Shard(sh.index, sh.count));
+        }
+        if file.cells().is_empty() {
+            return Err(FileSourceError::Empty);
+        }
+        let set = CellSet::new(file.cells().to_vec())?;
+        Ok(FileSource {
+            file,
+            layout: FileLayout::Cells(set),
+            kind: "file",
+        })
+    }
+
+    /// Say that the file was built at start-up and is held in memory (`/api/scene`'s
+    /// `source` is then `"memory"`).
+    pub fn in_memory(mut self) -> Self {
+        self.kind = "memory";
+        self
+    }
+
+    /// The file served.
+    pub fn file(&self) -> &PvsFile {
+        &self.file
     }
 }
 
@@ -190,7 +266,7 @@ impl PvsSource for FileSource {
     fn info(&self) -> SourceInfo {
         let h = self.file.header();
         SourceInfo {
-            kind: "file",
+            kind: self.kind,
             method: h.method.clone(),
             // `sampled` and `all` are the only non-conservative methods (`all`
             // is conservative, if useless).
@@ -199,17 +275,34 @@ impl PvsSource for FileSource {
         }
     }
 
-    fn grid(&self) -> &CellGrid {
-        &self.grid
+    fn layout(&self) -> Layout<'_> {
+        match &self.layout {
+            FileLayout::Grid { grid, .. } => Layout::Grid(grid),
+            FileLayout::Cells(set) => Layout::Cells(set),
+        }
+    }
+
+    fn locate(&self, p: DVec3) -> Result<CellId, PointError> {
+        match &self.layout {
+            FileLayout::Grid { grid, .. } => grid.locate(p),
+            FileLayout::Cells(_) => {
+                if !p.is_finite() {
+                    return Err(PointError::NotFinite);
+                }
+                self.file
+                    .locate(p)
+                    .map(|i| i as CellId)
+                    .ok_or(PointError::NoCell(p.x, p.y, p.z))
+            }
+        }
     }
 
     fn pvs(&self, id: CellId) -> Result<Vec<u32>, SourceError> {
-        let i = self
-            .index
-            .get(id as usize)
-            .copied()
-            .flatten()
-            .ok_or(SourceError::NoCell(id))?;
+        let i = match &self.layout {
+            FileLayout::Grid { index, .. } => index.get(id as usize).copied().flatten(),
+            FileLayout::Cells(set) => ((id as usize) < set.len()).then_some(id),
+        }
+        .ok_or(SourceError::NoCell(id))?;
         self.file
             .pvs(i as usize)
             .map_err(|e| SourceError::Method(e.to_string()))
@@ -274,15 +367,18 @@ mod tests {
         let src = FileSource::new(file, &scene).unwrap();
         assert_eq!(src.info().kind, "file");
         assert_eq!(src.info().method, "dual-ray");
-        assert_eq!(src.grid().len(), cells.len() + 1);
+        assert_eq!(src.layout().len(), cells.len() + 1);
         for (i, c) in cells.iter().enumerate() {
             let id = src.locate(c.center()).unwrap();
             assert_eq!(src.cell(id), Some(*c));
             assert_eq!(src.pvs(id).unwrap(), expected[i]);
         }
         // The grid's cell the file lacks.
-        let missing = (0..src.grid().len() as u32)
-            .find(|&id| src.index[id as usize].is_none())
+        let FileLayout::Grid { index, .. } = &src.layout else {
+            panic!("a grid file is served on its grid")
+        };
+        let missing = (0..src.layout().len() as u32)
+            .find(|&id| index[id as usize].is_none())
             .unwrap();
         assert_eq!(missing, 2);
         assert_eq!(src.pvs(missing), Err(SourceError::NoCell(2)));

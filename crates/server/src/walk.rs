@@ -2,14 +2,15 @@
 //!
 //! The protocol of the dual ray space paper's remote walkthrough (§6, Fig. 5):
 //! * when the walk begins, the server sends the PVS of the client's cell and of the
-//!   **eight adjacent cells**;
+//!   **eight adjacent cells** (on a free cell set, the cells whose boxes touch its box:
+//!   [`crate::layout`]);
 //! * each time the client enters a new cell, the server starts on the adjacent cells it
 //!   has not sent yet — those **ahead along the motion first** (at most five for a move
 //!   to a side or corner neighbour: the three behind were already sent), and, at driving
 //!   speed, the cell two steps ahead — so that the PVS of the next cell is in the client's
 //!   hands before it gets there;
 //! * beyond Fig. 5, on every position report the cell the client's direction of motion
-//!   leads into ([`crate::grid::CellGrid::next_cell`]) is requested at
+//!   leads into ([`crate::source::PvsSource::next_cell`]) is requested at
 //!   [`Priority::Ahead`], ahead of every other prefetch, and on a cell change the requests
 //!   for cells no longer adjacent are withdrawn (the cache skips jobs nobody waits for), so
 //!   that at driving speed the workers spend their time on the cell the client reaches next;
@@ -211,7 +212,9 @@ impl Session {
             "type": "welcome",
             "objects": self.s.scene.objects.len(),
             "origin": [self.s.origin.x, self.s.origin.y, self.s.origin.z],
-            "grid": src.grid(),
+            "grid": src.layout().grid(),
+            "layout": src.layout().kind(),
+            "cells": src.layout().len(),
             "method": info.method,
             "conservative": info.conservative,
             "source": info.kind,
@@ -253,12 +256,23 @@ impl Session {
 
     /// Count a client error; send it; close when there were too many.
     async fn client_error(&mut self, ws: &mut WebSocket, msg: String) -> Result<Flow, ()> {
+        self.client_error_seq(ws, msg, None).await
+    }
+
+    /// [`Session::client_error`] about the position message `seq`, if it has one.
+    async fn client_error_seq(
+        &mut self,
+        ws: &mut WebSocket,
+        msg: String,
+        seq: Option<u64>,
+    ) -> Result<Flow, ()> {
         self.errors += 1;
         self.s.counters.ws_errors.fetch_add(1, Ordering::Relaxed);
-        if !self
-            .send_json(ws, json!({"type": "error", "error": msg}))
-            .await
-        {
+        let mut m = json!({"type": "error", "error": msg});
+        if let Some(seq) = seq {
+            m["seq"] = json!(seq);
+        }
+        if !self.send_json(ws, m).await {
             return Err(());
         }
         if self.errors > self.s.config.max_session_errors {
@@ -301,7 +315,8 @@ impl Session {
         let src = self.s.source().clone();
         let cell = match src.locate(p) {
             Ok(c) => c,
-            Err(e) => return self.client_error(ws, e.to_string()).await,
+            // The `seq` tells the client which position had no cell (it steps back).
+            Err(e) => return self.client_error_seq(ws, e.to_string(), seq).await,
         };
         let now = Instant::now();
         if let Some((q, t)) = self.last {
@@ -341,9 +356,9 @@ impl Session {
             }
             // Fig. 5: the adjacent cells, those ahead first; at speed, two steps ahead.
             let mut next = src.neighbours(cell, self.heading);
-            let fast = self.speed_m_s > FAST_CELLS_PER_S * src.grid().cell_size_m;
+            let fast = self.speed_m_s > FAST_CELLS_PER_S * src.layout().scale_m();
             if fast {
-                if let Some(a) = src.grid().ahead(cell, self.heading, 2) {
+                if let Some(a) = src.ahead(cell, self.heading, 2) {
                     next.insert(1.min(next.len()), a);
                 }
             }
@@ -366,7 +381,7 @@ impl Session {
             self.forget_old(ws).await?;
         }
         // The cell the motion leads into goes before the other prefetches.
-        let into = src.grid().next_cell(p.truncate(), self.heading);
+        let into = src.next_cell(p, self.heading);
         if into != self.heading_into {
             self.heading_into = into;
             if let Some(n) = into {

@@ -2,11 +2,18 @@
 // (dual ray space paper, §1 and §6). It knows nothing of the city beforehand; the server
 // sends the PVS of the viewcell it stands in and of the cells around it (as deltas), and
 // the geometry of each object once. Protocol: docs/api.md.
+//
+// Two kinds of scene (`/api/scene`'s `kind`): a city, walked at eye height above the
+// ground z = 0 on a regular grid of cells the page locates itself; and a level (a BSP or
+// mesh level), whose cells are free shapes the server locates (the `ack` of each position
+// names the cell), walked on its floors: the eye stands `eye_height` above the highest
+// surface below it (a ray cast down against the geometry the page holds), and a move
+// into a wall (a ray cast along the move) is refused.
 import * as THREE from 'three';
 
-const WALK_SPEED = 1.5; // m/s
+const WALK_SPEED = 1.5; // m/s, at an eye height of 1.7 m (speeds scale with the eye)
 const DRIVE_SPEED = 14; // m/s (50 km/h)
-const EYE = 1.7; // m
+const EYE = 1.7; // m, a city's default (the server says: `eye_height`)
 const POS_INTERVAL_MS = 100;
 const HIDDEN_LIMIT = 4000;
 
@@ -54,6 +61,13 @@ function decodeGeometry(buf) {
 const S = {
   scene: null, // /api/scene
   grid: null,
+  level: false, // a level: cells located by the server, floors followed
+  eye: EYE, // eye height above the ground or floor (scene units)
+  scale: 100, // a typical cell width (scene units)
+  cellBoxes: new Map(), // cell id -> [x0,y0,z0,x1,y1,z1] (levels, from `cell` messages)
+  seq: 0, // last position sequence number sent (levels)
+  acked: 0, // last position sequence number acknowledged
+  lastGood: null, // last position the server located in a cell (levels)
   origin: null,
   ws: null,
   open: false,
@@ -75,8 +89,9 @@ const S = {
   boxes: null, // Float32Array, 6 per object
   stats: {
     objectsReceived: 0, bytesReceived: 0, cellChanges: 0, prefetchHits: 0,
-    lastInHandMs: null, worstInHandMs: 0, errors: 0, lastError: null,
+    lastInHandMs: null, worstInHandMs: 0, errors: 0, lastError: null, outside: 0,
   },
+  sentAt: new Map(), // seq -> position sent (levels)
   lastSent: 0,
   lastSentPos: null,
   waiters: [],
@@ -114,7 +129,11 @@ function resize() {
 window.addEventListener('resize', resize);
 resize();
 
+// A level's faces: stone, both sides (a BSP face is one-sided, seen from its front).
+const matLevel = new THREE.MeshLambertMaterial({ color: 0xb8aa94, flatShading: true, side: THREE.DoubleSide });
+
 function materialFor(kind) {
+  if (S.level) return matLevel;
   return kind === 1 ? matFlat : kind === 2 ? matMesh : matBlocks;
 }
 
@@ -135,6 +154,7 @@ function addGeometry(buf) {
 
 // ---- cells ----
 function cellOf(local) {
+  if (S.level) return S.currentCell; // the server locates (see onAck)
   const g = S.grid;
   const wx = local.x + S.origin[0], wy = local.y + S.origin[1];
   const maxX = g.origin[0] + g.nx * g.cell_size_m, maxY = g.origin[1] + g.ny * g.cell_size_m;
@@ -146,6 +166,10 @@ function cellOf(local) {
 
 function cellRect(cell) {
   // local coordinates
+  if (S.level) {
+    const b = S.cellBoxes.get(cell) || [0, 0, 0, 0, 0, 0];
+    return [b[0] - S.origin[0], b[1] - S.origin[1], b[3] - S.origin[0], b[4] - S.origin[1]];
+  }
   const g = S.grid;
   const ix = cell % g.nx, iy = Math.floor(cell / g.nx);
   const x0 = g.origin[0] + ix * g.cell_size_m - S.origin[0];
@@ -173,13 +197,19 @@ function display(cell) {
   // The viewcell, outlined like the papers' figures (a tall wireframe box).
   if (cellOutline) { scene3.remove(cellOutline); cellOutline.geometry.dispose(); }
   const [x0, y0, x1, y1] = cellRect(cell);
-  const z = S.grid.z_range_m;
-  const box = new THREE.BoxGeometry(x1 - x0, y1 - y0, Math.max(z[1], 30));
+  let z0 = 0, z1 = Math.max(S.grid ? S.grid.z_range_m[1] : 0, 30);
+  if (S.level) {
+    const b = S.cellBoxes.get(cell) || [0, 0, 0, 0, 0, 0];
+    z0 = b[2] - S.origin[2]; z1 = b[5] - S.origin[2];
+  }
+  const box = new THREE.BoxGeometry(x1 - x0, y1 - y0, z1 - z0);
   cellOutline = new THREE.LineSegments(new THREE.EdgesGeometry(box), new THREE.LineBasicMaterial({ color: 0x2ecc71 }));
   box.dispose();
-  cellOutline.position.set((x0 + x1) / 2, (y0 + y1) / 2, Math.max(z[1], 30) / 2);
+  cellOutline.position.set((x0 + x1) / 2, (y0 + y1) / 2, (z0 + z1) / 2);
   scene3.add(cellOutline);
   if (S.showHidden) refreshHidden();
+  // A level's start may be in mid-air (a cell's centre): stand on the first floor seen.
+  if (S.level && !S.onFloor) S.onFloor = standOnFloor();
   wakeWaiters();
 }
 
@@ -214,6 +244,7 @@ function onCellMessage(m) {
   for (const id of m.removed) set.delete(id);
   if (set.size !== m.size) noteError(`cell ${m.cell}: size ${set.size} != ${m.size}`);
   S.cells.set(m.cell, set);
+  if (m.box) S.cellBoxes.set(m.cell, m.box);
   if (m.cell === S.currentCell && S.displayCell !== m.cell) {
     if (S.waiting) {
       const dt = performance.now() - S.cellChangeAt;
@@ -239,7 +270,7 @@ async function refreshHidden() {
   S.hiddenMeshes.clear();
   if (!S.showHidden || S.displayCell === null || !S.boxes) return;
   // Hidden objects near the viewer: within two cells.
-  const r = S.grid.cell_size_m * 2;
+  const r = S.scale * 2;
   const want = [];
   const n = S.boxes.length / 6;
   for (let id = 0; id < n && want.length < HIDDEN_LIMIT; id++) {
@@ -280,7 +311,28 @@ function sendPos(force) {
   if (!force && (!moved || now - S.lastSent < POS_INTERVAL_MS)) return;
   S.lastSent = now;
   S.lastSentPos = S.pos.clone();
-  S.ws.send(JSON.stringify({ type: 'pos', x: S.pos.x + S.origin[0], y: S.pos.y + S.origin[1], z: S.pos.z + S.origin[2] }));
+  const m = { type: 'pos', x: S.pos.x + S.origin[0], y: S.pos.y + S.origin[1], z: S.pos.z + S.origin[2] };
+  // In a level the server locates the eye: every position asks for an `ack` naming its cell.
+  if (S.level) { m.seq = ++S.seq; S.sentAt.set(m.seq, S.pos.clone()); }
+  S.ws.send(JSON.stringify(m));
+}
+
+// A level's position was located: its cell is the current cell.
+function onAck(m) {
+  const at = S.sentAt.get(m.seq);
+  for (const k of S.sentAt.keys()) if (k <= m.seq) S.sentAt.delete(k);
+  S.acked = Math.max(S.acked, m.seq);
+  if (at) S.lastGood = at;
+  if (m.cell !== S.currentCell) enterCell(m.cell);
+}
+
+// A level's position was in no cell (inside a wall, outside the level): step back to
+// the last position that was.
+function onOutside(m) {
+  S.sentAt.delete(m.seq);
+  S.acked = Math.max(S.acked, m.seq);
+  S.stats.outside += 1;
+  if (S.lastGood) { S.pos.copy(S.lastGood); S.lastSentPos = null; }
 }
 
 function connect() {
@@ -307,7 +359,9 @@ function connect() {
       S.stats.bytesReceived += e.data.length;
       const m = JSON.parse(e.data);
       if (m.type === 'cell') onCellMessage(m);
+      else if (m.type === 'ack') { if (S.level) onAck(m); }
       else if (m.type === 'forget') for (const c of m.cells) S.cells.delete(c);
+      else if (m.type === 'error' && S.level && m.seq !== undefined && m.seq !== null) onOutside(m);
       else if (m.type === 'error') noteError(m.error);
       wakeWaiters();
     };
@@ -335,8 +389,44 @@ document.addEventListener('mousemove', (e) => {
   S.pitch = Math.max(-1.4, Math.min(1.4, S.pitch - e.movementY * 0.0025));
 });
 
+// ---- floors and walls (levels) ----
+const ray = new THREE.Raycaster();
+const DOWN = new THREE.Vector3(0, 0, -1);
+// The eye may climb a step this high (Quake: 18 units of 46) in one move.
+const STEP_UP = 0.45;
+// Walls are kept this far from the eye (Quake: a player is 32 units wide).
+const RADIUS = 0.35;
+
+/** The highest surface below `p` (local, at most a step above the feet), or null. */
+function floorBelow(p) {
+  if (pvsGroup.children.length === 0) return null;
+  const from = new THREE.Vector3(p.x, p.y, p.z - S.eye + STEP_UP * S.eye);
+  ray.set(from, DOWN);
+  ray.far = 200 * S.eye;
+  const hit = ray.intersectObjects(pvsGroup.children, false)[0];
+  return hit ? hit.point.z : null;
+}
+
+/** Whether a wall stands within `len` (plus the radius) of `p` along `dir` (unit, xy). */
+function blocked(p, dir, len) {
+  if (pvsGroup.children.length === 0) return false;
+  // Above a climbable step, below the eye.
+  const from = new THREE.Vector3(p.x, p.y, p.z - S.eye + 1.5 * STEP_UP * S.eye);
+  ray.set(from, new THREE.Vector3(dir.x, dir.y, 0));
+  ray.far = len + RADIUS * S.eye;
+  return ray.intersectObjects(pvsGroup.children, false).length > 0;
+}
+
+/** Put the eye `eye` above the floor below it, if there is one. */
+function standOnFloor() {
+  const f = floorBelow(S.pos);
+  if (f !== null) S.pos.z = f + S.eye;
+  return f !== null;
+}
+
 function step(dt) {
-  const speed = keys.has('ShiftLeft') || keys.has('ShiftRight') ? DRIVE_SPEED : WALK_SPEED;
+  const k = S.eye / EYE; // speeds are given at a person's eye height in metres
+  const speed = k * (keys.has('ShiftLeft') || keys.has('ShiftRight') ? DRIVE_SPEED : WALK_SPEED);
   if (keys.has('ArrowLeft')) S.yaw += dt * 1.2;
   if (keys.has('ArrowRight')) S.yaw -= dt * 1.2;
   const f = new THREE.Vector2(Math.cos(S.yaw), Math.sin(S.yaw));
@@ -350,7 +440,14 @@ function step(dt) {
     v.normalize().multiplyScalar(speed * dt);
     const next = S.pos.clone();
     next.x += v.x; next.y += v.y;
-    if (cellOf(next) !== null) S.pos.copy(next);
+    if (S.level) {
+      const len = v.length();
+      if (blocked(S.pos, v.clone().divideScalar(len), len)) return;
+      const f = floorBelow(next);
+      if (f === null && pvsGroup.children.length > 0) return; // no floor: not a place to stand
+      if (f !== null) next.z = f + S.eye;
+      S.pos.copy(next);
+    } else if (cellOf(next) !== null) S.pos.copy(next);
   }
 }
 
@@ -364,22 +461,33 @@ function updateCamera() {
 const mapCanvas = document.getElementById('minimap');
 const mapCtx = mapCanvas.getContext('2d');
 function drawMap() {
-  if (!S.grid || !S.boxes) return;
+  if (!S.scene || !S.boxes) return;
   const W = mapCanvas.width, H = mapCanvas.height;
-  const span = S.grid.cell_size_m * 3.2; // metres across
+  const span = S.scale * 3.2; // metres (scene units) across
   const k = W / span;
   const tx = (x) => W / 2 + (x - S.pos.x) * k;
   const ty = (y) => H / 2 - (y - S.pos.y) * k;
   mapCtx.fillStyle = '#20252b';
   mapCtx.fillRect(0, 0, W, H);
   const n = S.boxes.length / 6;
-  const half = span / 2 + 50;
+  const half = span / 2 + S.scale / 2;
+  // In a level, a plan at the walker's height: what crosses the band from the feet to the
+  // eye (walls), not the floors below nor the ceilings above.
+  const feet = S.pos.z - S.eye;
   for (let id = 0; id < n; id++) {
     const b = id * 6;
+    if (S.level && (S.boxes[b + 5] < feet + 0.25 * S.eye || S.boxes[b + 2] > S.pos.z)) continue;
     if (S.boxes[b + 3] < S.pos.x - half || S.boxes[b] > S.pos.x + half || S.boxes[b + 4] < S.pos.y - half || S.boxes[b + 1] > S.pos.y + half) continue;
-    mapCtx.fillStyle = S.displaySet.has(id) ? '#4f8cff' : '#d9453b';
     const x0 = tx(S.boxes[b]), y0 = ty(S.boxes[b + 4]);
-    mapCtx.fillRect(x0, y0, Math.max(1, (S.boxes[b + 3] - S.boxes[b]) * k), Math.max(1, (S.boxes[b + 4] - S.boxes[b + 1]) * k));
+    const w = Math.max(1, (S.boxes[b + 3] - S.boxes[b]) * k), h = Math.max(1, (S.boxes[b + 4] - S.boxes[b + 1]) * k);
+    if (S.level) {
+      // A level's faces overlap in plan: outlines.
+      mapCtx.strokeStyle = S.displaySet.has(id) ? '#4f8cff' : '#d9453b';
+      mapCtx.strokeRect(x0, y0, w, h);
+    } else {
+      mapCtx.fillStyle = S.displaySet.has(id) ? '#4f8cff' : '#d9453b';
+      mapCtx.fillRect(x0, y0, w, h);
+    }
   }
   // Held cells dashed, the current viewcell in green.
   mapCtx.setLineDash([3, 3]);
@@ -435,7 +543,7 @@ let frame = 0;
 function loop(t) {
   const dt = Math.min(0.1, (t - lastT) / 1000);
   lastT = t;
-  if (S.grid) {
+  if (S.scene && S.origin) {
     step(dt);
     const c = cellOf(S.pos);
     if (c !== S.currentCell) enterCell(c);
@@ -469,13 +577,22 @@ function inHand() {
 
 window.sightline = {
   ready: null,
-  /** Move to world (x, y) at eye height; resolves once the new cell's PVS is drawn. */
-  async walkTo(x, y) {
-    S.pos.set(x - S.origin[0], y - S.origin[1], EYE);
-    const c = cellOf(S.pos);
-    if (c !== S.currentCell) enterCell(c);
-    sendPos(true);
-    await until(inHand);
+  /** Move to world (x, y) at eye height (in a level: to (x, y, z), or on the floor below
+   * the current eye height when z is not given); resolves once the new cell's PVS is drawn. */
+  async walkTo(x, y, z) {
+    if (S.level) {
+      S.pos.set(x - S.origin[0], y - S.origin[1], z === undefined ? S.pos.z : z - S.origin[2]);
+      if (z === undefined) standOnFloor();
+      sendPos(true);
+      const mine = S.seq;
+      await until(() => S.acked >= mine && inHand());
+    } else {
+      S.pos.set(x - S.origin[0], y - S.origin[1], S.eye);
+      const c = cellOf(S.pos);
+      if (c !== S.currentCell) enterCell(c);
+      sendPos(true);
+      await until(inHand);
+    }
     updateCamera();
     renderer.render(scene3, camera);
     return { cell: S.currentCell, drawn: drawnIds() };
@@ -486,6 +603,9 @@ window.sightline = {
   hiddenIds: () => [...S.hiddenMeshes.keys()].sort((a, b) => a - b),
   setShowHidden,
   position: () => [S.pos.x + S.origin[0], S.pos.y + S.origin[1], S.pos.z + S.origin[2]],
+  /** The floor below the eye (world z), from the geometry held; null if none. */
+  floor: () => { const f = floorBelow(S.pos); return f === null ? null : f + S.origin[2]; },
+  eyeHeight: () => S.eye,
   cell: () => S.currentCell,
   stats: () => ({ ...S.stats, pvsSize: S.displaySet.size, drawn: S.meshes.size, cellsHeld: S.cells.size }),
   render: () => { drawMap(); drawStats(); renderer.render(scene3, camera); },
@@ -514,19 +634,41 @@ function startPoint() {
 }
 
 async function main() {
-  S.scene = await getJson('scene');
-  S.grid = S.scene.grid;
-  S.origin = S.scene.origin;
+  const scene = await getJson('scene');
+  S.grid = scene.grid;
+  S.origin = scene.origin;
+  S.level = scene.kind === 'level';
+  S.eye = scene.eye_height || EYE;
+  S.scale = scene.cell_scale || (S.grid ? S.grid.cell_size_m : 100);
   const rb = await fetch(apiUrl('boxes'));
   if (!rb.ok) throw new Error(`boxes: HTTP ${rb.status}`);
   const bb = await rb.arrayBuffer();
   S.boxes = new Float32Array(bb, 8, new DataView(bb).getUint32(4, true) * 6);
+  if (S.level) {
+    // Indoors: no ground, no sky; near and far planes at the level's scale.
+    const k = S.eye / EYE;
+    camera.near = 0.1 * k;
+    camera.far = 6000 * k;
+    camera.updateProjectionMatrix();
+    scene3.fog = null;
+    scene3.background = new THREE.Color(0x1c2026);
+    const b = scene.bounds;
+    const st = scene.start || [(b[0] + b[3]) / 2, (b[1] + b[4]) / 2, (b[2] + b[5]) / 2];
+    S.pos.set(st[0] - S.origin[0], st[1] - S.origin[1], st[2] - S.origin[2]);
+    S.lastGood = S.pos.clone();
+    S.scene = scene;
+    await connect();
+    sendPos(true);
+    requestAnimationFrame(loop);
+    return;
+  }
+  S.scene = scene;
   const [w, h] = [S.grid.nx * S.grid.cell_size_m, S.grid.ny * S.grid.cell_size_m];
   ground = new THREE.Mesh(new THREE.PlaneGeometry(w + 2000, h + 2000), new THREE.MeshLambertMaterial({ color: 0x55604f }));
   ground.position.set(w / 2, h / 2, -0.05);
   scene3.add(ground);
   const [sx, sy] = startPoint();
-  S.pos.set(sx, sy, EYE);
+  S.pos.set(sx, sy, S.eye);
   await connect();
   requestAnimationFrame(loop);
 }

@@ -159,15 +159,39 @@ pub fn info(path: &Path) -> anyhow::Result<BspInfo> {
 /// (`query --at` locates by the leaf's shape and answers as `pvs --at`).
 pub fn build(path: &Path, mode: Mode, out: &Path, quiet: bool) -> anyhow::Result<()> {
     let level = level(path)?;
-    let scene = level.to_scene();
     let t = Instant::now();
-    let portals = prepare(&level)?;
-    let method = match mode {
+    let (bytes, cells) = encode(&level, mode)
+        .with_context(|| format!("cannot build the PVS of {}", path.display()))?;
+    sightline_pvs::build::write_atomic(out, &bytes)
+        .with_context(|| format!("cannot write {}", out.display()))?;
+    if !quiet {
+        eprintln!(
+            "wrote {}: {} leaves, method {}, {} bytes ({:.0} B/leaf), {:.1} s",
+            out.display(),
+            cells,
+            method_of(mode).name(),
+            bytes.len(),
+            bytes.len() as f64 / cells as f64,
+            t.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+fn method_of(mode: Mode) -> Method {
+    match mode {
         Mode::Full => Method::Portals,
         Mode::Fast => Method::PortalsFast,
-    };
-    let cells = sightline_portals::leaf_cells(&level);
-    anyhow::ensure!(!cells.is_empty(), "{} has no open leaf", path.display());
+    }
+}
+
+/// The `.pvs` of a level (what `build` writes, what `serve` holds in memory) and its
+/// number of cells.
+pub fn encode(level: &BspLevel, mode: Mode) -> anyhow::Result<(Vec<u8>, usize)> {
+    let scene = level.to_scene();
+    let portals = prepare(level)?;
+    let cells = sightline_portals::leaf_cells(level);
+    anyhow::ensure!(!cells.is_empty(), "the level has no open leaf");
     let all = portals.solve_all(mode);
     let pvs_of = |c: &sightline_core::Cell| all.get(c.id().unwrap_or(0) as usize);
     let sets: Vec<roaring::RoaringBitmap> = cells
@@ -184,7 +208,7 @@ pub fn build(path: &Path, mode: Mode, out: &Path, quiet: bool) -> anyhow::Result
         .collect();
     let header = sightline_pvs::Header::new(
         scene.fingerprint(),
-        method.name(),
+        method_of(mode).name(),
         Vec::new(),
         scene.objects.len(),
         cells.len(),
@@ -198,20 +222,12 @@ pub fn build(path: &Path, mode: Mode, out: &Path, quiet: bool) -> anyhow::Result
         Some(&leaves),
         &sightline_pvs::format::EncodeOptions::default(),
     )?;
-    sightline_pvs::build::write_atomic(out, &bytes)
-        .with_context(|| format!("cannot write {}", out.display()))?;
-    if !quiet {
-        eprintln!(
-            "wrote {}: {} leaves, method {}, {} bytes ({:.0} B/leaf), {:.1} s",
-            out.display(),
-            cells.len(),
-            method.name(),
-            bytes.len(),
-            bytes.len() as f64 / cells.len() as f64,
-            t.elapsed().as_secs_f64()
-        );
-    }
-    Ok(())
+    Ok((bytes, cells.len()))
+}
+
+/// Load a level for `serve`.
+pub fn load(path: &Path) -> anyhow::Result<BspLevel> {
+    level(path)
 }
 
 /// `check LEVEL.bsp --method portals|portals-fast [--reference vis] [--cells K]`: the

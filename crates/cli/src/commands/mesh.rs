@@ -261,6 +261,42 @@ pub fn build(
     quiet: bool,
 ) -> anyhow::Result<()> {
     let t = Instant::now();
+    let level = encode(scene, full, smallest_hole, quiet)?;
+    sightline_pvs::build::write_atomic(out, &level.bytes)
+        .with_context(|| format!("cannot write {}", out.display()))?;
+    if !quiet {
+        let r = &level.auto.report;
+        eprintln!(
+            "wrote {}: {} automatic cells, {} portals, {} clusters of {} source objects, smallest hole {:.3}, method {}, {} bytes, {:.1} s",
+            out.display(),
+            r.cells,
+            r.portals,
+            level.auto.objects,
+            level.clustered.source_names.len(),
+            r.smallest_hole,
+            method_name(full),
+            level.bytes.len(),
+            t.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+/// A mesh level cut into automatic cells with the `.pvs` of its clusters.
+pub struct Level {
+    pub clustered: Clustered,
+    pub auto: AutoCells,
+    /// The `.pvs` (what `build` writes, what `serve` holds in memory).
+    pub bytes: Vec<u8>,
+}
+
+/// Cluster the level, cut it into cells, solve every cell and encode the `.pvs`.
+pub fn encode(
+    scene: &SceneArg,
+    full: bool,
+    smallest_hole: Option<f64>,
+    quiet: bool,
+) -> anyhow::Result<Level> {
     let (clustered, auto) = prepare(scene, smallest_hole, full, quiet)?;
     let cells: Vec<sightline_core::Cell> = auto
         .cell_boxes()
@@ -296,24 +332,29 @@ pub fn build(
         &sets,
         &sightline_pvs::format::EncodeOptions::default(),
     )?;
-    sightline_pvs::build::write_atomic(out, &bytes)
-        .with_context(|| format!("cannot write {}", out.display()))?;
-    if !quiet {
-        let r = &auto.report;
-        eprintln!(
-            "wrote {}: {} automatic cells, {} portals, {} clusters of {} source objects, smallest hole {:.3}, method {}, {} bytes, {:.1} s",
-            out.display(),
-            r.cells,
-            r.portals,
-            auto.objects,
-            clustered.source_names.len(),
-            r.smallest_hole,
-            method_name(full),
-            bytes.len(),
-            t.elapsed().as_secs_f64()
-        );
-    }
-    Ok(())
+    Ok(Level {
+        clustered,
+        auto,
+        bytes,
+    })
+}
+
+/// The clustered scene a `.pvs` of this level was built on: the level clustered as
+/// `build` clusters it, with the smallest hole the file records (clusters depend on it).
+pub fn clustered_for(scene: &SceneArg, file: &sightline_pvs::PvsFile) -> anyhow::Result<Clustered> {
+    let hole = file
+        .header()
+        .params
+        .iter()
+        .find(|(k, _)| k == "smallest_hole")
+        .and_then(|(_, v)| v.parse::<f64>().ok());
+    let raw = load_scene(scene)?;
+    let opts = options(hole, false)?;
+    Ok(cluster_scene(
+        &raw,
+        default_cluster_size(&raw, &opts),
+        MAX_CLUSTER_TRIANGLES,
+    ))
 }
 
 fn join(ids: &[u32]) -> String {

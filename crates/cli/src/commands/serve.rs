@@ -1,24 +1,37 @@
-//! `sightline serve`: the walkthrough server on a scene, answering from a
-//! `.pvs` file or computing PVS on-line with `--method` (dual ray space paper, §6).
+//! `sightline serve`: the walkthrough server on a scene (dual ray space paper, §6).
+//!
+//! A city is served on a regular grid of cells, answering from a `.pvs` file or
+//! computing PVS on-line with `--method`. A level (a BSP or a mesh) is served on its own
+//! cells — BSP leaves, automatic cells — from a `.pvs` of the level or from one built
+//! in memory at start-up with a portal method ([`level`]).
 
-use crate::cli::Command;
+mod level;
+
+use crate::cli::{Command, SceneArg};
+use crate::commands::{bsp, mesh};
 use crate::common::load_scene;
 use anyhow::{bail, Context};
+use sightline_core::Method;
 use sightline_methods::MethodOptions;
+use sightline_scene::Scene;
 use sightline_server::cache::CacheConfig;
 use sightline_server::grid::CellGrid;
 use sightline_server::source::{FileSource, OnlineSource, PvsSource, SharedSource};
-use sightline_server::{Server, ServerConfig};
+use sightline_server::{Server, ServerConfig, ViewSettings};
 use std::io::Write;
+use std::path::Path;
 use std::sync::Arc;
 
-pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
+pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
     let Command::Serve {
         scene: scene_arg,
         pvs,
+        pvs_flag,
         addr,
         cell_size,
         method,
+        eye_height,
+        smallest_hole,
         token,
         resolution,
         workers,
@@ -35,50 +48,48 @@ pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
     if workers == Some(0) {
         bail!("--workers must be at least 1");
     }
-    let scene = Arc::new(load_scene(&scene_arg)?);
-    if scene.is_empty() {
-        bail!("{}: the scene has no objects", scene_arg.scene.display());
-    }
-    let source: SharedSource = match pvs {
-        Some(path) => {
-            let file = sightline_pvs::PvsFile::open(&path)
-                .with_context(|| format!("cannot open {}", path.display()))?;
-            let src = FileSource::new(file, &scene)
-                .with_context(|| format!("cannot serve {}", path.display()))?;
-            let g = src.grid();
-            eprintln!(
-                "serving {}: {} grid cells of {} m (--method, --cell-size and --resolution come from the file)",
-                path.display(),
-                g.len(),
-                g.cell_size_m
-            );
-            Arc::new(src)
+    if let Some(e) = eye_height {
+        if !(e.is_finite() && e > 0.0) {
+            bail!("--eye-height must be a positive number of scene units, got {e}");
         }
-        None => {
-            let grid = CellGrid::cover(&scene.bounds, cell_size).context("--cell-size")?;
-            eprintln!(
-                "preparing method '{method}' for {} objects ({} cells of {cell_size} m)…",
-                scene.len(),
-                grid.len()
-            );
-            let opts = MethodOptions {
-                resolution_px: resolution,
-                ..Default::default()
-            };
-            let m = sightline_methods::create(&method, scene.clone(), &opts)
-                .with_context(|| format!("cannot prepare method '{method}'"))?;
-            if method == "all" {
-                eprintln!("note: method 'all' does no culling: every PVS is the whole scene");
-            } else if !m.is_conservative() {
-                eprintln!(
-                    "warning: method '{method}' is NOT conservative: clients may miss visible objects"
-                );
-            }
-            Arc::new(OnlineSource::new(m, grid))
+    }
+    if let Some(m) = &method {
+        m.parse::<Method>()?;
+    }
+    let pvs = pvs.or(pvs_flag);
+    let path = &scene_arg.scene;
+    let is_level = bsp::is_bsp(path) || mesh::is_mesh(path);
+    // A level is served on its own cells unless a city method is asked for explicitly.
+    let level_mode = match method.as_deref() {
+        None => is_level,
+        Some(m) => {
+            let portal = matches!(m.parse(), Ok(Method::Portals | Method::PortalsFast));
+            is_level && (portal || pvs.is_some())
         }
     };
+    let served = if level_mode {
+        let method = method.as_deref().unwrap_or("portals-fast");
+        level::prepare(&scene_arg, pvs.as_deref(), method, smallest_hole, quiet)?
+    } else {
+        city(
+            &scene_arg,
+            pvs.as_deref(),
+            cell_size,
+            method.as_deref().unwrap_or("dual-ray"),
+            resolution,
+        )?
+    };
+    let Served {
+        scene,
+        source,
+        mut view,
+    } = served;
+    if let Some(e) = eye_height {
+        view.eye_height = e;
+    }
     let mut config = ServerConfig {
         token,
+        view,
         ..Default::default()
     };
     if let Some(w) = workers {
@@ -88,7 +99,7 @@ pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
         };
     }
     let info = source.info();
-    let cells = source.grid().len();
+    let cells = source.layout().len();
     let rt = tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()
@@ -122,6 +133,71 @@ pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
         server.run(listener, shutdown_signal()).await?;
         eprintln!("sightline: shut down");
         Ok(())
+    })
+}
+
+/// What is served: the scene (its objects are what the PVS lists), the PVS source and
+/// how the viewer walks.
+pub(crate) struct Served {
+    pub scene: Arc<Scene>,
+    pub source: SharedSource,
+    pub view: ViewSettings,
+}
+
+/// A city: a regular grid of cells at eye height, from a `.pvs` or an on-line method.
+fn city(
+    scene_arg: &SceneArg,
+    pvs: Option<&Path>,
+    cell_size: f64,
+    method: &str,
+    resolution: Option<u32>,
+) -> anyhow::Result<Served> {
+    let scene = Arc::new(load_scene(scene_arg)?);
+    if scene.is_empty() {
+        bail!("{}: the scene has no objects", scene_arg.scene.display());
+    }
+    let source: SharedSource = match pvs {
+        Some(path) => {
+            let file = sightline_pvs::PvsFile::open(path)
+                .with_context(|| format!("cannot open {}", path.display()))?;
+            let src = FileSource::new(file, &scene)
+                .with_context(|| format!("cannot serve {}", path.display()))?;
+            let g = src.layout();
+            eprintln!(
+                "serving {}: {} grid cells of {} m (--method, --cell-size and --resolution come from the file)",
+                path.display(),
+                g.len(),
+                g.scale_m()
+            );
+            Arc::new(src)
+        }
+        None => {
+            let grid = CellGrid::cover(&scene.bounds, cell_size).context("--cell-size")?;
+            eprintln!(
+                "preparing method '{method}' for {} objects ({} cells of {cell_size} m)…",
+                scene.len(),
+                grid.len()
+            );
+            let opts = MethodOptions {
+                resolution_px: resolution,
+                ..Default::default()
+            };
+            let m = sightline_methods::create(method, scene.clone(), &opts)
+                .with_context(|| format!("cannot prepare method '{method}'"))?;
+            if method == "all" {
+                eprintln!("note: method 'all' does no culling: every PVS is the whole scene");
+            } else if !m.is_conservative() {
+                eprintln!(
+                    "warning: method '{method}' is NOT conservative: clients may miss visible objects"
+                );
+            }
+            Arc::new(OnlineSource::new(m, grid))
+        }
+    };
+    Ok(Served {
+        scene,
+        source,
+        view: ViewSettings::default(),
     })
 }
 

@@ -635,6 +635,47 @@ impl BspLevel {
     }
 }
 
+/// Where a player starts in a BSP file: the `origin` of the first `info_player_start`
+/// entity of the entity lump (else of the first `info_player_deathmatch`), in level
+/// units. Quake puts a player's origin 24 units above the floor and the eye 22 above the
+/// origin. `None` when the file has no such entity or cannot be read.
+pub fn player_start(data: &[u8]) -> Option<[f64; 3]> {
+    let r = Reader::new(data).ok()?;
+    let text = String::from_utf8_lossy(r.lump(0));
+    let mut found: [Option<[f64; 3]>; 2] = [None, None];
+    // Entities are `{ "key" "value" ... }` blocks; values never hold quotes.
+    for block in text.split('{').skip(1) {
+        let body = block.split('}').next().unwrap_or("");
+        let quoted: Vec<&str> = body.split('"').skip(1).step_by(2).collect();
+        let mut class = None;
+        let mut origin = None;
+        for kv in quoted.chunks(2) {
+            match kv {
+                ["classname", v] => class = Some(*v),
+                ["origin", v] => {
+                    let n: Vec<f64> = v
+                        .split_whitespace()
+                        .filter_map(|x| x.parse().ok())
+                        .collect();
+                    if let [x, y, z] = n[..] {
+                        origin = finite3([x, y, z], "origin").ok();
+                    }
+                }
+                _ => {}
+            }
+        }
+        let slot = match class {
+            Some("info_player_start") => 0,
+            Some("info_player_deathmatch") => 1,
+            _ => continue,
+        };
+        if found[slot].is_none() {
+            found[slot] = origin;
+        }
+    }
+    found[0].or(found[1])
+}
+
 /// The importer's entry point for [`super::load`].
 pub fn parse(bytes: &[u8]) -> Result<Scene, ImportError> {
     Ok(read_bsp(bytes)?.to_scene())
@@ -656,5 +697,26 @@ mod tests {
         assert!(read_bsp(&v).unwrap_err().to_string().contains("planes"));
         v[12] = 0;
         assert!(read_bsp(&v).unwrap_err().to_string().contains("model"));
+    }
+
+    #[test]
+    fn the_player_start_is_read_from_the_entities() {
+        let text = br#"{ "classname" "worldspawn" "wad" "x.wad" }
+{ "origin" "1 2 3" "classname" "info_player_deathmatch" }
+{ "classname" "info_player_start" "origin" "-480 -352 88" "angle" "90" }
+"#;
+        let mut v = vec![0u8; 4 + 8 * LUMPS];
+        v[0] = 29;
+        let at = v.len() as i32;
+        v[4..8].copy_from_slice(&at.to_le_bytes());
+        v[8..12].copy_from_slice(&(text.len() as i32).to_le_bytes());
+        v.extend_from_slice(text);
+        assert_eq!(player_start(&v), Some([-480.0, -352.0, 88.0]));
+        let only_dm = br#"{ "origin" "1 2 3" "classname" "info_player_deathmatch" }"#;
+        v.truncate(4 + 8 * LUMPS);
+        v[8..12].copy_from_slice(&(only_dm.len() as i32).to_le_bytes());
+        v.extend_from_slice(only_dm);
+        assert_eq!(player_start(&v), Some([1.0, 2.0, 3.0]));
+        assert_eq!(player_start(&[1, 2]), None);
     }
 }

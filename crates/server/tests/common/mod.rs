@@ -5,6 +5,7 @@ use futures_util::{SinkExt, StreamExt};
 use sightline_geom::{DVec2, Polygon};
 use sightline_scene::{Object, Scene};
 use sightline_server::grid::{CellGrid, CellId};
+use sightline_server::layout::Layout;
 use sightline_server::source::{PvsSource, SharedSource, SourceError, SourceInfo};
 use sightline_server::{Server, ServerConfig};
 use std::net::SocketAddr;
@@ -57,8 +58,8 @@ impl PvsSource for NearSource {
             params: vec![format!("radius={}", self.radius_m)],
         }
     }
-    fn grid(&self) -> &CellGrid {
-        &self.grid
+    fn layout(&self) -> Layout<'_> {
+        Layout::Grid(&self.grid)
     }
     fn pvs(&self, id: CellId) -> Result<Vec<u32>, SourceError> {
         if self.delay_ms > 0 {

@@ -1,0 +1,214 @@
+//! `serve LEVEL.bsp` and `serve LEVEL.obj|.gltf|.glb`: a level served on its own cells.
+//!
+//! The cells are those `build LEVEL --method portals[-fast]` stores — a BSP level's open
+//! leaves (convex cells), a mesh level's automatic cells (boxes) — and the served
+//! objects are those the `.pvs` lists: a BSP's world faces, a mesh's clusters (the level
+//! clustered as `build` clusters it). With `--pvs` the file is served after checking it
+//! was built for this scene; without, the same `.pvs` is built in memory first and
+//! served from memory ([`sightline_server::source::FileSource::in_memory`]), so both
+//! answer exactly as `query --at` does on the file.
+//!
+//! The viewer walks on the level's floors at `eye_height` (see the `--eye-height` help):
+//! it starts at the BSP's `info_player_start` (its origin + 22, the eye of a Quake player
+//! standing there) when the level has one and that point is in a cell, otherwise at the
+//! centre of the largest cell whose centre lies in it.
+
+use super::Served;
+use crate::cli::SceneArg;
+use crate::commands::{bsp, mesh};
+use anyhow::{bail, Context};
+use sightline_geom::DVec3;
+use sightline_portals::Mode;
+use sightline_pvs::PvsFile;
+use sightline_server::source::{FileSource, PvsSource};
+use sightline_server::ViewSettings;
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Eye height in a BSP level: Quake's player origin is 24 units above the floor and its
+/// eye 22 above the origin.
+pub const BSP_EYE_HEIGHT: f64 = 46.0;
+/// A Quake eye above the player's origin.
+const BSP_EYE_ABOVE_ORIGIN: f64 = 22.0;
+
+/// Load the level, build or open its `.pvs`, and say what is served.
+pub(crate) fn prepare(
+    scene: &SceneArg,
+    pvs: Option<&Path>,
+    method: &str,
+    smallest_hole: Option<f64>,
+    quiet: bool,
+) -> anyhow::Result<Served> {
+    if bsp::is_bsp(&scene.scene) {
+        bsp_level(&scene.scene, pvs, method)
+    } else {
+        mesh_level(scene, pvs, method, smallest_hole, quiet)
+    }
+}
+
+fn open(path: &Path) -> anyhow::Result<PvsFile> {
+    PvsFile::open(path).with_context(|| format!("cannot open {}", path.display()))
+}
+
+fn bsp_level(path: &Path, pvs: Option<&Path>, method: &str) -> anyhow::Result<Served> {
+    let level = bsp::load(path)?;
+    let scene = Arc::new(level.to_scene());
+    let t = Instant::now();
+    let (file, built) = match pvs {
+        Some(p) => (open(p)?, None),
+        None => {
+            let Some(mode) = bsp::portal_mode(path, method)? else {
+                bail!("a .bsp level is served with its PVS built by portals or portals-fast (or --pvs L.pvs), not '{method}'");
+            };
+            let (bytes, _) = bsp::encode(&level, mode)
+                .with_context(|| format!("cannot build the PVS of {}", path.display()))?;
+            let n = bytes.len();
+            (PvsFile::from_bytes(bytes)?, Some((mode, n)))
+        }
+    };
+    let src = source(file, &scene, pvs, built.is_some())?;
+    let start = std::fs::read(path)
+        .ok()
+        .and_then(|b| sightline_scene::import::bsp::player_start(&b))
+        .map(|o| DVec3::new(o[0], o[1], o[2] + BSP_EYE_ABOVE_ORIGIN))
+        .filter(|p| src.locate(*p).is_ok());
+    let start = start.or_else(|| largest_cell_centre(&src));
+    describe(
+        path,
+        pvs,
+        &src,
+        "leaves (convex cells)",
+        built.map(|(mode, n)| {
+            let m = match mode {
+                Mode::Full => "portals",
+                Mode::Fast => "portals-fast",
+            };
+            (m, n, t.elapsed().as_secs_f64())
+        }),
+    );
+    Ok(Served {
+        scene,
+        view: ViewSettings {
+            kind: "level",
+            eye_height: BSP_EYE_HEIGHT,
+            start: start.map(|p| p.to_array()),
+        },
+        source: Arc::new(src),
+    })
+}
+
+fn mesh_level(
+    scene: &SceneArg,
+    pvs: Option<&Path>,
+    method: &str,
+    smallest_hole: Option<f64>,
+    quiet: bool,
+) -> anyhow::Result<Served> {
+    let path = &scene.scene;
+    let t = Instant::now();
+    let (file, clustered, built) = match pvs {
+        Some(p) => {
+            let file = open(p)?;
+            let clustered = mesh::clustered_for(scene, &file)?;
+            (file, clustered, None)
+        }
+        None => {
+            let Some(full) = mesh::portal_mode(path, method) else {
+                bail!("a mesh level is served with its PVS built by portals or portals-fast (or --pvs L.pvs), not '{method}'");
+            };
+            let level = mesh::encode(scene, full, smallest_hole, quiet)?;
+            let n = level.bytes.len();
+            let m = if full { "portals" } else { "portals-fast" };
+            (
+                PvsFile::from_bytes(level.bytes)?,
+                level.clustered,
+                Some((m, n)),
+            )
+        }
+    };
+    let hole = file
+        .header()
+        .params
+        .iter()
+        .find(|(k, _)| k == "smallest_hole")
+        .and_then(|(_, v)| v.parse::<f64>().ok())
+        .filter(|h| h.is_finite() && *h > 0.0);
+    let scene = Arc::new(clustered.scene);
+    let src = source(file, &scene, pvs, built.is_some())?;
+    let start = largest_cell_centre(&src);
+    describe(
+        path,
+        pvs,
+        &src,
+        "automatic cells",
+        built.map(|(m, n)| (m, n, t.elapsed().as_secs_f64())),
+    );
+    Ok(Served {
+        scene,
+        view: ViewSettings {
+            kind: "level",
+            eye_height: mesh_eye_height(hole),
+            start: start.map(|p| p.to_array()),
+        },
+        source: Arc::new(src),
+    })
+}
+
+/// A mesh level's eye height: 1.7 (metres, glTF's unit and the usual one of OBJ
+/// exports), raised to 2.5 smallest holes when the voxels are coarser, so that the eye
+/// stands in the free voxels above the floor's surface layer, inside a cell.
+pub fn mesh_eye_height(smallest_hole: Option<f64>) -> f64 {
+    smallest_hole.map_or(1.7, |h| (2.5 * h).max(1.7))
+}
+
+fn source(
+    file: PvsFile,
+    scene: &sightline_scene::Scene,
+    pvs: Option<&Path>,
+    in_memory: bool,
+) -> anyhow::Result<FileSource> {
+    let what = pvs.map_or_else(
+        || "the level's PVS".to_string(),
+        |p| p.display().to_string(),
+    );
+    let src = FileSource::cells(file, scene).with_context(|| format!("cannot serve {what}"))?;
+    Ok(if in_memory { src.in_memory() } else { src })
+}
+
+/// The centre of the largest cell (by the volume of its box) whose centre is in it.
+fn largest_cell_centre(src: &FileSource) -> Option<DVec3> {
+    let cells = src.file().cells();
+    let mut order: Vec<usize> = (0..cells.len()).collect();
+    let volume = |i: usize| cells[i].size().x * cells[i].size().y * cells[i].size().z;
+    order.sort_by(|&a, &b| volume(b).total_cmp(&volume(a)).then(a.cmp(&b)));
+    order
+        .into_iter()
+        .map(|i| (i, cells[i].center()))
+        .find(|(i, c)| src.locate(*c).ok() == Some(*i as u32))
+        .map(|(_, c)| c)
+}
+
+/// The one line saying what is served.
+fn describe(
+    path: &Path,
+    pvs: Option<&Path>,
+    src: &FileSource,
+    cells: &str,
+    built: Option<(&str, usize, f64)>,
+) {
+    let n = src.layout().len();
+    let method = src.info().method;
+    match (pvs, built) {
+        (_, Some((m, bytes, s))) => eprintln!(
+            "serving {}: {n} {cells}, PVS built by {m} in {s:.2} s and held in memory ({bytes} bytes)",
+            path.display()
+        ),
+        (Some(p), None) => eprintln!(
+            "serving {}: {n} {cells} of {}, method {method}",
+            path.display(),
+            p.display()
+        ),
+        (None, None) => {}
+    }
+}
