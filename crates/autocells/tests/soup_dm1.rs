@@ -30,8 +30,8 @@ fn dm1_soup_conservative_and_culls() {
         &JudgeOptions {
             viewpoints: 6,
             cell_points: 16,
-            segments: 2,
-            segments_vis: 32,
+            segments: 4,
+            segments_vis: 64,
             bsp_mode: Mode::Fast,
             seed: 11,
         },
