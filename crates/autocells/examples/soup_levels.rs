@@ -4,9 +4,10 @@
 //! the ray oracle through the BSP tree ([`sightline_autocells::soup::judge`]).
 //!
 //! `cargo run --release -p sightline-autocells --example soup_levels -- LEVELS... [h=H]
-//! [points=N] [bsp=fast|full] [auto=fast|full] [max_voxels=N] [obj=DIR]`
+//! [points=N] [bsp=fast|full] [auto=fast|full] [max_voxels=N] [group=G] [max_box=B] [obj=DIR]`
 //! (LEVELS: `.bsp` files or folders of them; H: the smallest hole in Quake units,
-//! default 4; N: viewpoints per level, default 60; `obj=DIR` also writes each soup as
+//! default 4; N: viewpoints per level, default 60; G, B: `Options::group_block`
+//! (0: every box a solver cell) and `Options::max_box`; `obj=DIR` also writes each soup as
 //! `DIR/LEVEL.obj`, one `o face_N` per face).
 
 use sightline_autocells::soup::{bsp_soup, judge, wall_thickness, JudgeOptions};
@@ -54,7 +55,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let paths = levels(&args)?;
     if paths.is_empty() {
-        return Err("usage: soup_levels LEVELS... [h=H] [points=N] [bsp=fast|full] [auto=fast|full] [max_voxels=N] [obj=DIR]".into());
+        return Err("usage: soup_levels LEVELS... [h=H] [points=N] [bsp=fast|full] [auto=fast|full] [max_voxels=N] [group=G] [max_box=B] [obj=DIR]".into());
     }
     let h: f64 = arg(&args, "h")?.unwrap_or(4.0);
     let points: usize = arg(&args, "points")?.unwrap_or(60);
@@ -62,6 +63,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let bsp_full = arg::<String>(&args, "bsp")?.is_some_and(|m| m == "full");
     let auto_full = arg::<String>(&args, "auto")?.is_some_and(|m| m == "full");
     let obj_dir: Option<PathBuf> = arg(&args, "obj")?;
+    let group_block: usize = arg(&args, "group")?.unwrap_or(Options::default().group_block);
+    let max_box: usize = arg(&args, "max_box")?.unwrap_or(Options::default().max_box);
     let bsp_mode = if bsp_full { Mode::Full } else { Mode::Fast };
     let mut rows = Vec::new();
     for path in &paths {
@@ -99,6 +102,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             smallest_hole: Some(h),
             max_voxels,
             full: auto_full,
+            group_block,
+            max_box,
             ..Options::default()
         };
         let t = Instant::now();
