@@ -11,6 +11,7 @@
 //!
 //! * [`voxels`] — surface, air and solid voxels, leaks;
 //! * [`cells`] — greedy boxes of open voxels and the portals between them;
+//! * [`soup`] — a Quake level's faces as a triangle soup, judged against the BSP path;
 //! * [`AutoCells`] — the whole pipeline and the per-cell cluster PVS.
 //!
 //! ```
@@ -24,6 +25,7 @@
 pub mod cells;
 pub mod faces;
 pub mod judge;
+pub mod soup;
 pub mod testlevel;
 pub mod voxels;
 
