@@ -40,6 +40,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             None => Options::default().group_block,
         },
         axis_rule: std::env::var("AXIS_RULE").is_ok_and(|v| v == "1"),
+        walls_bound_cells: std::env::var("WALLS_BOUND").is_ok_and(|v| v == "1"),
         ..Options::default()
     };
     let cluster_size = sightline_autocells::default_cluster_size(&scene, &opts);

@@ -111,7 +111,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let seconds_auto = t.elapsed().as_secs_f64();
         let r = &auto.report;
         println!(
-            "{name}: {} faces ({} liquid left out), h {:.3}{}, grid {:?} = {} voxels: {} surface, {} air, {} solid ({} of {} components solid); {} cells, {} portals, solver {} cells / {} portals; voxels {:.2} s, cells {:.2} s, pvs {:.2} s, total {seconds_auto:.2} s{}",
+            "{name}: {} faces ({} liquid left out), h {:.3}{}, grid {:?} = {} voxels: {} surface, {} air, {} solid ({} of {} components solid), {} closed faces, {} sealed; {} cells, {} portals, solver {} cells / {} portals; voxels {:.2} s, cells {:.2} s, pvs {:.2} s, total {seconds_auto:.2} s{}",
             soup.faces.len(),
             soup.liquid_faces,
             r.smallest_hole,
@@ -123,6 +123,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             r.voxels.solid,
             r.voxels.solid_components,
             r.voxels.components,
+            r.voxels.closed_faces,
+            r.voxels.sealed,
             r.cells,
             r.portals,
             r.groups,

@@ -3,7 +3,8 @@
 //! Rule: the open voxels (air and surface) are merged greedily into maximal
 //! axis-aligned boxes — scanning voxels in x, then y, then z order, each unassigned
 //! open voxel starts a box grown along x, then y, then z while the whole new row or
-//! slab is open and unassigned, up to `max_box` voxels per side. Every box is a
+//! slab is open and unassigned (and, when walls bound cells, crosses no closed face),
+//! up to `max_box` voxels per side. Every box is a
 //! convex cell. Two boxes that share part of a face share one portal: the rectangle
 //! of the overlap, covering it whole, less its closed faces ([`crate::faces`]: faces
 //! inside a polygon of the surface, which no sight line crosses); no box holds a
@@ -33,16 +34,16 @@ pub struct Portal {
 
 /// Greedy boxes over the open voxels; returns the boxes and each voxel's box
 /// (`u32::MAX` for solid voxels).
-pub fn greedy_boxes(v: &Voxels, max_box: usize) -> (Vec<VoxelBox>, Vec<u32>) {
+pub fn greedy_boxes(v: &Voxels, max_box: usize, walls_bound: bool) -> (Vec<VoxelBox>, Vec<u32>) {
     let g = &v.grid;
     let [nx, ny, nz] = g.dims;
     let max_box = max_box.max(1);
     let mut owner = vec![u32::MAX; g.len()];
     let mut boxes = Vec::new();
     let free = |owner: &[u32], i: usize| v.is_open(i) && owner[i] == u32::MAX;
-    // A box holds no closed face between two of its voxels: the flow assumes sight
-    // crosses a cell freely.
-    let closed = |x: usize, y: usize, z: usize, k: usize| v.face_closed(g.index(x, y, z), k);
+    // With `walls_bound`, a box holds no closed face between two of its voxels.
+    let closed =
+        |x: usize, y: usize, z: usize, k: usize| walls_bound && v.face_closed(g.index(x, y, z), k);
     for z in 0..nz {
         for y in 0..ny {
             for x in 0..nx {

@@ -1,7 +1,8 @@
-//! Closed voxel faces: a face of the grid that lies inside an axis-aligned polygon of
-//! the level's surface (a triangle, or two coplanar triangles sharing an edge whose
-//! union is convex: the quads levels are built of). A line through the open face
-//! crosses the polygon's inside, so no sight line passes there: the face closes. Where
+//! Closed voxel faces: a face of the grid covered by the union of the axis-aligned
+//! triangles that lie in its plane. A line through the open face crosses one of them,
+//! so no sight line passes there: the face closes. The cover is exact: the square less
+//! each triangle in turn, by convex differences, must leave no area (overlapping and
+//! duplicate triangles are fine; a crack between two triangles keeps the face open). Where
 //! the level is built on a lattice the grid shares (walls on multiples of the voxel
 //! size), walls thus stop sight even when they are two faces with air between them;
 //! surfaces off the lattice close nothing and stay handled by the voxels alone.
@@ -47,9 +48,11 @@ pub fn closed_faces(grid: &Grid, tris: &[[DVec3; 3]]) -> Vec<u8> {
     }
     for ((k, m), tris) in planes {
         let (a, c) = ((k + 1) % 3, (k + 2) % 3);
-        for poly in convex_pieces(&tris) {
+        // The squares each triangle's bounds meet.
+        let mut by_square: HashMap<(usize, usize), Vec<usize>> = HashMap::new();
+        for (ti, t) in tris.iter().enumerate() {
             let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-            for p in &poly {
+            for p in t {
                 for d in 0..2 {
                     lo[d] = lo[d].min(p[d]);
                     hi[d] = hi[d].max(p[d]);
@@ -57,88 +60,109 @@ pub fn closed_faces(grid: &Grid, tris: &[[DVec3; 3]]) -> Vec<u8> {
             }
             let i0 = lo[0].floor().max(0.0) as usize;
             let j0 = lo[1].floor().max(0.0) as usize;
-            let i1 = (hi[0].ceil() as usize).min(grid.dims[a]);
-            let j1 = (hi[1].ceil() as usize).min(grid.dims[c]);
+            let i1 = (hi[0].ceil().max(0.0) as usize).min(grid.dims[a]);
+            let j1 = (hi[1].ceil().max(0.0) as usize).min(grid.dims[c]);
             for i in i0..i1 {
                 for j in j0..j1 {
-                    let corners = [
-                        [i as f64, j as f64],
-                        [i as f64 + 1.0, j as f64],
-                        [i as f64, j as f64 + 1.0],
-                        [i as f64 + 1.0, j as f64 + 1.0],
-                    ];
-                    if corners.iter().all(|p| inside_convex(&poly, *p)) {
-                        let mut v = [0usize; 3];
-                        v[k] = m - 1;
-                        v[a] = i;
-                        v[c] = j;
-                        closed[grid.index(v[0], v[1], v[2])] |= 1 << k;
-                    }
+                    by_square.entry((i, j)).or_default().push(ti);
                 }
+            }
+        }
+        for ((i, j), ts) in by_square {
+            let square = vec![
+                [i as f64, j as f64],
+                [i as f64 + 1.0, j as f64],
+                [i as f64 + 1.0, j as f64 + 1.0],
+                [i as f64, j as f64 + 1.0],
+            ];
+            if covered(square, ts.iter().map(|&t| &tris[t])) {
+                let mut v = [0usize; 3];
+                v[k] = m - 1;
+                v[a] = i;
+                v[c] = j;
+                closed[grid.index(v[0], v[1], v[2])] |= 1 << k;
             }
         }
     }
     closed
 }
 
-/// The triangles of one plane as convex polygons: each triangle alone, and each pair
-/// of triangles sharing an edge whose union is convex (a quad) as one polygon.
-fn convex_pieces(tris: &[[[f64; 2]; 3]]) -> Vec<Vec<[f64; 2]>> {
-    let key = |p: [f64; 2]| [(p[0] * 1e6).round() as i64, (p[1] * 1e6).round() as i64];
-    let mut by_edge: HashMap<([i64; 2], [i64; 2]), Vec<usize>> = HashMap::new();
-    for (i, t) in tris.iter().enumerate() {
-        for e in 0..3 {
-            let (p, q) = (key(t[e]), key(t[(e + 1) % 3]));
-            by_edge.entry((p.min(q), p.max(q))).or_default().push(i);
+/// Uncovered area below which a square counts as covered (in squared voxel sides):
+/// rounding slivers only; a real crack of 10⁻⁶ of a voxel leaves 10⁻⁶.
+const COVER_EPS: f64 = 1e-9;
+
+/// Whether the unit square is covered by the union of the triangles: the square less
+/// each triangle in turn (convex differences: exact for overlapping triangles too)
+/// leaves no area.
+fn covered<'a>(square: Vec<[f64; 2]>, tris: impl Iterator<Item = &'a [[f64; 2]; 3]>) -> bool {
+    let mut left = vec![square];
+    for t in tris {
+        // Counter-clockwise, so that the inside is left of every edge.
+        let t = if cross(t[0], t[1], t[2]) < 0.0 {
+            [t[0], t[2], t[1]]
+        } else {
+            *t
+        };
+        let mut next = Vec::new();
+        for mut piece in left {
+            for e in 0..3 {
+                let (p, q) = (t[e], t[(e + 1) % 3]);
+                // Outside this edge: uncovered for good; inside: on to the next edge.
+                let outside = clip(&piece, p, q, false);
+                if area(&outside) > 0.0 {
+                    next.push(outside);
+                }
+                piece = clip(&piece, p, q, true);
+                if piece.len() < 3 {
+                    break;
+                }
+            }
+        }
+        left = next;
+        if left.is_empty() {
+            return true;
         }
     }
-    let mut out: Vec<Vec<[f64; 2]>> = tris.iter().map(|t| t.to_vec()).collect();
-    for (_, ts) in by_edge {
-        if let [i, j] = ts[..] {
-            if let Some(quad) = union_quad(&tris[i], &tris[j]) {
-                out.push(quad);
-            }
+    left.iter().map(|p| area(p)).sum::<f64>() < COVER_EPS
+}
+
+fn cross(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
+    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+}
+
+/// The part of convex `poly` left of the line p → q (`keep_left`) or right of it.
+fn clip(poly: &[[f64; 2]], p: [f64; 2], q: [f64; 2], keep_left: bool) -> Vec<[f64; 2]> {
+    let side = |x: [f64; 2]| {
+        let s = cross(p, q, x);
+        if keep_left {
+            s
+        } else {
+            -s
+        }
+    };
+    let mut out = Vec::with_capacity(poly.len() + 1);
+    for i in 0..poly.len() {
+        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+        let (sa, sb) = (side(a), side(b));
+        if sa >= 0.0 {
+            out.push(a);
+        }
+        if (sa > 0.0 && sb < 0.0) || (sa < 0.0 && sb > 0.0) {
+            let t = sa / (sa - sb);
+            out.push([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]);
         }
     }
     out
 }
 
-/// Two triangles sharing an edge: their union as a convex quad, if it is convex.
-fn union_quad(t: &[[f64; 2]; 3], u: &[[f64; 2]; 3]) -> Option<Vec<[f64; 2]>> {
-    let same = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).abs() < 1e-9 && (p[1] - q[1]).abs() < 1e-9;
-    // The vertex of `u` not on the shared edge, and where the edge sits in `t`.
-    let far = u
-        .iter()
-        .copied()
-        .find(|&p| !t.iter().any(|&q| same(p, q)))?;
-    let e = (0..3).find(|&e| {
-        let (p, q) = (t[e], t[(e + 1) % 3]);
-        u.iter().any(|&x| same(x, p)) && u.iter().any(|&x| same(x, q))
-    })?;
-    let quad = vec![t[e], far, t[(e + 1) % 3], t[(e + 2) % 3]];
-    // Convex: every turn has the same sign (strictly: no degenerate corner).
-    let turn = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
-        (b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0])
-    };
-    let s: Vec<f64> = (0..4)
-        .map(|i| turn(quad[i], quad[(i + 1) % 4], quad[(i + 2) % 4]))
-        .collect();
-    (s.iter().all(|&x| x > 1e-12) || s.iter().all(|&x| x < -1e-12)).then_some(quad)
-}
-
-/// Whether `p` lies in the closed convex polygon (either orientation; within 10⁻⁹ of a
-/// voxel for coordinates that are exact on the lattice).
-fn inside_convex(poly: &[[f64; 2]], p: [f64; 2]) -> bool {
-    let (mut pos, mut neg) = (false, false);
+fn area(poly: &[[f64; 2]]) -> f64 {
+    if poly.len() < 3 {
+        return 0.0;
+    }
+    let mut s = 0.0;
     for i in 0..poly.len() {
         let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-        let cross = (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]);
-        let len = (b[0] - a[0]).abs() + (b[1] - a[1]).abs();
-        if cross > 1e-9 * len {
-            pos = true;
-        } else if cross < -1e-9 * len {
-            neg = true;
-        }
+        s += a[0] * b[1] - a[1] * b[0];
     }
-    !(pos && neg)
+    (s * 0.5).abs()
 }

@@ -44,7 +44,7 @@ use voxels::{Grid, Leak, VoxelStats, Voxels, SURFACE};
 pub struct Options {
     /// Voxel size (scene units). Openings are never closed, whatever their size;
     /// walls thinner than about twice this do not occlude. `None`: 0.5 (a person-sized
-    /// walkthrough in metres), raised until the grid fits `max_voxels`.
+    /// walkthrough in metres), doubled until the grid fits `max_voxels`.
     pub smallest_hole: Option<f64>,
     /// Voxel budget; the smallest hole is raised to fit (reported).
     pub max_voxels: usize,
@@ -55,6 +55,12 @@ pub struct Options {
     pub axis_rule: bool,
     /// Largest cell side, in voxels.
     pub max_box: usize,
+    /// Cells stop at closed faces ([`faces`]) instead of growing through them: walls
+    /// on the lattice then bound cells, which the full flow needs to see them as
+    /// occluders; off by default, since the layer of voxels behind a closed face
+    /// becomes thin cells that widen the base flood (portals never cross a closed face
+    /// either way).
+    pub walls_bound_cells: bool,
     /// `true`: the flow through portal sequences (`portals`); `false`: the base flood
     /// only (`portals-fast`).
     pub full: bool,
@@ -72,6 +78,7 @@ impl Default for Options {
             backface_tolerance: 0.05,
             axis_rule: false,
             max_box: 64,
+            walls_bound_cells: false,
             full: true,
             group_block: 32,
         }
@@ -177,7 +184,7 @@ impl AutoCells {
         let voxels = voxels::voxelize_with(grid, &tris, opts.backface_tolerance, opts.axis_rule);
         let seconds_voxels = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
-        let (boxes, owner) = greedy_boxes(&voxels, opts.max_box);
+        let (boxes, owner) = greedy_boxes(&voxels, opts.max_box, opts.walls_bound_cells);
         if boxes.is_empty() {
             return Err(AutoError::NoFreeSpace);
         }

@@ -33,6 +33,9 @@ pub const TOUCH_EPS: f64 = 1e-4;
 pub const AIR: u8 = 0;
 pub const SURFACE: u8 = 1;
 pub const SOLID: u8 = 2;
+/// Open (air or surface) yet out of sight: no chain of open voxels through open faces
+/// joins it to a viewpoint (an air voxel that meets a front).
+pub const SEALED: u8 = 3;
 
 /// A regular grid of cubes.
 #[derive(Clone, Debug)]
@@ -112,6 +115,8 @@ pub struct VoxelStats {
     pub degenerate_triangles: usize,
     /// Voxel faces inside an axis-aligned polygon of the surface (closed to sight).
     pub closed_faces: usize,
+    /// Open voxels out of sight ([`SEALED`]): behind closed faces and solid voxels.
+    pub sealed: usize,
 }
 
 /// A level that leaks: the outside sees the back of the geometry yet reaches a voxel
@@ -156,7 +161,7 @@ impl Voxels {
         self.closed[v] & (1 << k) != 0
     }
     pub fn is_open(&self, v: usize) -> bool {
-        self.state[v] != SOLID
+        self.state[v] == AIR || self.state[v] == SURFACE
     }
 }
 
@@ -405,10 +410,12 @@ pub fn voxelize_with(
             state[v] = SOLID;
         }
     }
+    seal_out_of_sight(&grid, &mut state, &sees_front, &closed);
     for &s in &state {
         match s {
             SURFACE => stats.surface += 1,
             SOLID => stats.solid += 1,
+            SEALED => stats.sealed += 1,
             _ => stats.air += 1,
         }
     }
@@ -421,6 +428,55 @@ pub fn voxelize_with(
         leak,
         sees_front,
         closed,
+    }
+}
+
+/// Mark [`SEALED`] the open voxels no viewpoint reaches: a sight line runs through a
+/// chain of face-adjacent open voxels, from a viewpoint (an air voxel meeting a front
+/// along an axis) across open faces only — through a closed face it would cross a
+/// polygon of the surface, and through an edge or corner between two closed faces it
+/// would touch one (grazing: nothing is seen by it). Behind the closed faces of a wall
+/// on the lattice lies a layer of surface voxels that no line reaches.
+fn seal_out_of_sight(grid: &Grid, state: &mut [u8], sees_front: &[bool], closed: &[u8]) {
+    let n = grid.len();
+    let mut reached = vec![false; n];
+    let mut queue: VecDeque<usize> = (0..n)
+        .filter(|&v| state[v] == AIR && sees_front[v])
+        .collect();
+    if queue.is_empty() {
+        return;
+    }
+    for &v in &queue {
+        reached[v] = true;
+    }
+    let strides = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
+    while let Some(v) = queue.pop_front() {
+        let c = grid.coords(v);
+        for k in 0..3 {
+            // +k across v's face, -k across the neighbour's.
+            if c[k] + 1 < grid.dims[k] && closed[v] & (1 << k) == 0 {
+                let w = v + strides[k];
+                if !reached[w] && (state[w] == AIR || state[w] == SURFACE) {
+                    reached[w] = true;
+                    queue.push_back(w);
+                }
+            }
+            if c[k] > 0 {
+                let w = v - strides[k];
+                if closed[w] & (1 << k) == 0
+                    && !reached[w]
+                    && (state[w] == AIR || state[w] == SURFACE)
+                {
+                    reached[w] = true;
+                    queue.push_back(w);
+                }
+            }
+        }
+    }
+    for v in 0..n {
+        if !reached[v] && (state[v] == AIR || state[v] == SURFACE) {
+            state[v] = SEALED;
+        }
     }
 }
 

@@ -131,7 +131,11 @@ fn bad_input_is_an_error_or_a_counted_warning() {
 #[test]
 fn a_wall_of_zero_thickness_on_the_lattice_occludes() {
     let scene = testlevel::paper_wall(0.0);
-    let auto = AutoCells::build(&scene, &opts(0.5)).expect("builds");
+    let walls = Options {
+        walls_bound_cells: true,
+        ..opts(0.5)
+    };
+    let auto = AutoCells::build(&scene, &walls).expect("builds");
     assert!(
         auto.voxels.stats.closed_faces >= 8 * 6,
         "{:?}",
@@ -144,7 +148,7 @@ fn a_wall_of_zero_thickness_on_the_lattice_occludes() {
     no_misses(&scene, &auto);
     // Off the lattice the wall closes no face: conservative, nothing culled across it.
     let scene = testlevel::paper_wall(0.2);
-    let auto = AutoCells::build(&scene, &opts(0.5)).expect("builds");
+    let auto = AutoCells::build(&scene, &walls).expect("builds");
     let from_w = auto.pvs_at([-2.0, 0.0, 1.0]).expect("free");
     assert!(from_w.contains(&id(&scene, "crate-e")));
     no_misses(&scene, &auto);
