@@ -177,15 +177,7 @@ impl CellGrid {
         let (ix, iy) = squares.coords(id)?;
         let r = squares.rect_from_corner(ix, iy);
         // Distance along the ray to the side crossed in x and in y.
-        let t = |pc: f64, lo: f64, hi: f64, hc: f64| {
-            if hc > 0.0 {
-                (hi - pc) / hc
-            } else if hc < 0.0 {
-                (lo - pc) / hc
-            } else {
-                f64::INFINITY
-            }
-        };
+        let t = exit_distance;
         let (tx, ty) = (t(p.x, r.min.x, r.max.x, h.x), t(p.y, r.min.y, r.max.y, h.y));
         let eps = 1e-9 * self.cell_size_m;
         let dx = if tx <= ty + eps {
@@ -215,6 +207,18 @@ impl CellGrid {
         }
         let (dx, dy) = (h.x.round() as i64, h.y.round() as i64);
         squares.neighbour(ix, iy, dx * steps as i64, dy * steps as i64)
+    }
+}
+
+/// Distance along a ray from coordinate `pc` with direction component `hc` to the side
+/// of the interval `[lo, hi]` it leaves by (infinite when `hc` is 0).
+pub(crate) fn exit_distance(pc: f64, lo: f64, hi: f64, hc: f64) -> f64 {
+    if hc > 0.0 {
+        (hi - pc) / hc
+    } else if hc < 0.0 {
+        (lo - pc) / hc
+    } else {
+        f64::INFINITY
     }
 }
 

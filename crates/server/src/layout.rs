@@ -209,15 +209,7 @@ impl CellSet {
         if h == DVec2::ZERO || !p.is_finite() {
             return None;
         }
-        let t = |pc: f64, lo: f64, hi: f64, hc: f64| {
-            if hc > 0.0 {
-                (hi - pc) / hc
-            } else if hc < 0.0 {
-                (lo - pc) / hc
-            } else {
-                f64::INFINITY
-            }
-        };
+        let t = crate::grid::exit_distance;
         let exit = t(p.x, b.min.x, b.max.x, h.x)
             .min(t(p.y, b.min.y, b.max.y, h.y))
             .max(0.0);

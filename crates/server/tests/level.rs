@@ -7,11 +7,11 @@
 mod common;
 
 use common::*;
-use sightline_core::{Cell, ConvexCell, HalfSpace};
-use sightline_geom::{DVec2, DVec3, ViewCell};
+use sightline_core::Cell;
+use sightline_geom::{DVec2, DVec3};
 use sightline_pvs::format::{encode_cells_with_leaves, EncodeOptions};
 use sightline_pvs::{Header, PvsFile};
-use sightline_scene::import::bsp::{load_bsp, BspLevel, Child};
+use sightline_scene::import::bsp::{load_bsp, BspLevel};
 use sightline_scene::Scene;
 use sightline_server::source::{FileSource, PvsSource, SharedSource};
 use sightline_server::{ServerConfig, ViewSettings};
@@ -20,43 +20,6 @@ use std::sync::Arc;
 fn dm1() -> BspLevel {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/quake/dm1.bsp");
     load_bsp(std::path::Path::new(path)).unwrap()
-}
-
-/// Every open leaf as its convex cell: the half-spaces of its path from the root.
-fn leaf_cells(level: &BspLevel) -> Vec<Cell> {
-    let mut out = vec![];
-    let mut stack = vec![(level.headnode, Vec::<HalfSpace>::new())];
-    while let Some((c, path)) = stack.pop() {
-        match c {
-            Child::Leaf(l) if level.is_view_leaf(l) => {
-                let leaf = &level.leaves[l as usize];
-                let lo = DVec3::from(leaf.mins) - 1.0;
-                let hi = DVec3::from(leaf.maxs) + 1.0;
-                let b = ViewCell::from_array([lo.x, lo.y, lo.z, hi.x, hi.y, hi.z]).unwrap();
-                out.push(Cell::Convex(ConvexCell::new(l, b, path)));
-            }
-            Child::Leaf(_) => {}
-            Child::Node(n) => {
-                let node = &level.nodes[n as usize];
-                let p = &level.planes[node.plane as usize];
-                let normal = DVec3::from(p.normal);
-                let mut front = path.clone();
-                front.push(HalfSpace {
-                    normal: -normal,
-                    offset: -p.dist,
-                });
-                let mut back = path;
-                back.push(HalfSpace {
-                    normal,
-                    offset: p.dist,
-                });
-                stack.push((node.children[0], front));
-                stack.push((node.children[1], back));
-            }
-        }
-    }
-    out.sort_by_key(|c| c.id());
-    out
 }
 
 struct Dm1 {
@@ -70,7 +33,7 @@ struct Dm1 {
 fn dm1_served() -> (Dm1, FileSource) {
     let level = dm1();
     let scene = Arc::new(level.to_scene());
-    let cells = leaf_cells(&level);
+    let cells = sightline_portals::leaf_cells(&level);
     let leaves: Vec<Vec<u32>> = cells
         .iter()
         .map(|c| level.reference_row(c.id().unwrap()))
