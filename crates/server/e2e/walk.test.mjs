@@ -65,6 +65,18 @@ function stopServer(proc) {
   });
 }
 
+/** A headless page on the viewer, ready, with its errors collected. */
+async function openViewer(base) {
+  const browser = await launchBrowser();
+  const page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
+  const pageErrors = [];
+  page.on('pageerror', (e) => pageErrors.push(String(e)));
+  page.on('console', (m) => { if (m.type() === 'error') pageErrors.push(m.text()); });
+  await page.goto(base + '/');
+  await page.evaluate(() => window.sightline.ready);
+  return { browser, page, pageErrors };
+}
+
 async function main() {
   let failed = sceneFile ? await cityWalk() : false;
   if (!failed && levelFile) failed = await levelWalk();
@@ -82,13 +94,9 @@ async function cityWalk() {
     log(`scene: ${scene.objects} objects, ${scene.cells} cells (${scene.grid.nx}×${scene.grid.ny} of ${scene.grid.cell_size_m} m), method ${scene.method}`);
     assert.equal(scene.method, method);
 
-    browser = await launchBrowser();
-    const page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
-    const pageErrors = [];
-    page.on('pageerror', (e) => pageErrors.push(String(e)));
-    page.on('console', (m) => { if (m.type() === 'error') pageErrors.push(m.text()); });
-    await page.goto(base + '/');
-    await page.evaluate(() => window.sightline.ready);
+    const viewer = await openViewer(base);
+    browser = viewer.browser;
+    const { page, pageErrors } = viewer;
     log('viewer ready');
 
     // A scripted path: along the middle row of cells, west to east, over up to 5 cells,
@@ -198,13 +206,9 @@ async function levelWalk() {
     assert.equal(scene.kind, 'level');
     assert.equal(scene.layout, 'cells');
     assert.ok(Array.isArray(scene.start), 'a start position');
-    browser = await launchBrowser();
-    const page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
-    const pageErrors = [];
-    page.on('pageerror', (e) => pageErrors.push(String(e)));
-    page.on('console', (m) => { if (m.type() === 'error') pageErrors.push(m.text()); });
-    await page.goto(base + '/');
-    await page.evaluate(() => window.sightline.ready);
+    const viewer = await openViewer(base);
+    browser = viewer.browser;
+    const { page, pageErrors } = viewer;
     const [sx, sy, sz] = scene.start;
     // Points of open space around the start, 40 units apart along x and y (those the
     // server locates in a cell).
