@@ -41,6 +41,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         },
         axis_rule: std::env::var("AXIS_RULE").is_ok_and(|v| v == "1"),
         walls_bound_cells: std::env::var("WALLS_BOUND").is_ok_and(|v| v == "1"),
+        flow_budget: match std::env::var("FLOW_BUDGET") {
+            Ok(b) if b == "none" => None,
+            Ok(b) => Some(b.parse()?),
+            Err(_) => Options::default().flow_budget,
+        },
         ..Options::default()
     };
     let cluster_size = sightline_autocells::default_cluster_size(&scene, &opts);
@@ -59,7 +64,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         r.voxels.solid,
         t1.elapsed().as_secs_f64()
     );
-    auto.solve(opts.full, opts.group_block);
+    auto.solve(opts.full, opts.group_block, opts.flow_budget);
     let total = t1.elapsed().as_secs_f64();
     let r = &auto.report;
     println!(

@@ -34,7 +34,7 @@ use rayon::prelude::*;
 use sightline_core::{Cell, VoxelCell};
 use sightline_geom::{DVec3, ViewCell};
 use sightline_portals::bits::Bits;
-use sightline_portals::flow::{cell_pvs, flow_all, might_see_all, Graph};
+use sightline_portals::flow::{cell_pvs, flow_all_within, might_see_all, Graph};
 use sightline_scene::Scene;
 use std::time::Instant;
 use voxels::{Grid, Leak, VoxelStats, Voxels, SURFACE};
@@ -61,6 +61,9 @@ pub struct Options {
     /// becomes thin cells that widen the base flood (portals never cross a closed face
     /// either way).
     pub walls_bound_cells: bool,
+    /// With `full`: most cells one portal's flow may enter before it answers the
+    /// portal's base flood instead (conservative either way; `None`: no bound).
+    pub flow_budget: Option<usize>,
     /// `true`: the flow through portal sequences (`portals`); `false`: the base flood
     /// only (`portals-fast`).
     pub full: bool,
@@ -79,6 +82,7 @@ impl Default for Options {
             axis_rule: false,
             max_box: 64,
             walls_bound_cells: false,
+            flow_budget: Some(DEFAULT_FLOW_BUDGET),
             full: true,
             group_block: 32,
         }
@@ -144,7 +148,7 @@ impl AutoCells {
     /// cell. Objects of `scene` are the clusters the PVS lists.
     pub fn build(scene: &Scene, opts: &Options) -> Result<AutoCells, AutoError> {
         let mut auto = AutoCells::cut(scene, opts)?;
-        auto.solve(opts.full, opts.group_block);
+        auto.solve(opts.full, opts.group_block, opts.flow_budget);
         Ok(auto)
     }
 
@@ -243,8 +247,9 @@ impl AutoCells {
     /// The cell PVS of every cell: the flow through portal sequences (`full`) or the
     /// base flood, on the boxes grouped by [`cells::group_boxes`] (`group_block`) when
     /// there are more than [`GROUP_ABOVE`]; a box sees every box of every group its
-    /// group sees.
-    pub fn solve(&mut self, full: bool, group_block: usize) {
+    /// group sees. The flow of a portal that would enter more than `flow_budget` cells
+    /// answers the portal's flood instead (a superset).
+    pub fn solve(&mut self, full: bool, group_block: usize, flow_budget: Option<usize>) {
         let t2 = Instant::now();
         let n = self.boxes.len();
         let (group, groups) = if group_block > 1 && n > GROUP_ABOVE {
@@ -261,7 +266,7 @@ impl AutoCells {
         );
         let mightsee = might_see_all(&graph);
         let sets = if full {
-            flow_all(&graph, &mightsee)
+            flow_all_within(&graph, &mightsee, flow_budget)
         } else {
             mightsee
         };
@@ -360,6 +365,9 @@ impl AutoCells {
 /// Above this many boxes the solver works on groups of boxes (`Options::group_block`):
 /// the portal flood costs the square of the portals.
 pub const GROUP_ABOVE: usize = 2000;
+
+/// The default [`Options::flow_budget`]: cells entered per portal's flow.
+pub const DEFAULT_FLOW_BUDGET: usize = 100_000;
 
 /// Clusters hold at most this many triangles.
 pub const MAX_CLUSTER_TRIANGLES: usize = 2048;

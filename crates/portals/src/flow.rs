@@ -116,6 +116,13 @@ pub fn might_see_all(g: &Graph) -> Vec<Seen> {
 /// first, in waves: a finished portal's flow bounds what later flows can see behind it
 /// (vis's `stat_done`).
 pub fn flow_all(g: &Graph, mightsee: &[Seen]) -> Vec<Seen> {
+    flow_all_within(g, mightsee, None)
+}
+
+/// [`flow_all`] with at most `budget` steps (cells entered) per portal's flow: a flow
+/// that would take more answers the portal's flood instead, a superset of its flow,
+/// so the result stays conservative and the solve time bounded.
+pub fn flow_all_within(g: &Graph, mightsee: &[Seen], budget: Option<usize>) -> Vec<Seen> {
     let n = g.portals.len();
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by_key(|&p| (mightsee[p].cells.count(), p));
@@ -124,7 +131,9 @@ pub fn flow_all(g: &Graph, mightsee: &[Seen]) -> Vec<Seen> {
     for chunk in order.chunks(wave) {
         let results: Vec<Seen> = chunk
             .par_iter()
-            .map(|&p| flow(g, p, mightsee, &done))
+            .map(|&p| {
+                flow_within(g, p, mightsee, &done, budget).unwrap_or_else(|| mightsee[p].clone())
+            })
             .collect();
         for (&p, r) in chunk.iter().zip(results) {
             done[p] = Some(r);
@@ -204,6 +213,18 @@ fn and(a: &Bits, b: &Bits) -> Bits {
 /// known, is portal `q`'s own flow result, a tighter bound than its flood for what
 /// lies behind it.
 pub fn flow(g: &Graph, p: usize, mightsee: &[Seen], done: &[Option<Seen>]) -> Seen {
+    flow_within(g, p, mightsee, done, None).unwrap_or_else(|| mightsee[p].clone())
+}
+
+/// [`flow`] within at most `budget` steps (cells entered); `None` when it would take
+/// more.
+pub fn flow_within(
+    g: &Graph,
+    p: usize,
+    mightsee: &[Seen],
+    done: &[Option<Seen>],
+    budget: Option<usize>,
+) -> Option<Seen> {
     let base = &g.portals[p];
     let cells = g.leaf_portals.len();
     let mut st = State {
@@ -216,6 +237,7 @@ pub fn flow(g: &Graph, p: usize, mightsee: &[Seen], done: &[Option<Seen>]) -> Se
             portals: Bits::new(g.portals.len()),
         },
         on_stack: Bits::new(cells),
+        steps_left: budget.unwrap_or(usize::MAX),
     };
     let head = Frame {
         source: base.winding.clone(),
@@ -225,7 +247,7 @@ pub fn flow(g: &Graph, p: usize, mightsee: &[Seen], done: &[Option<Seen>]) -> Se
         portals: std::borrow::Cow::Borrowed(&mightsee[p].portals),
     };
     st.recurse(base.to, &head);
-    st.vis
+    (st.steps_left > 0).then_some(st.vis)
 }
 
 struct State<'a> {
@@ -236,10 +258,16 @@ struct State<'a> {
     vis: Seen,
     /// The cells of the current sequence: a line never enters a cell twice.
     on_stack: Bits,
+    /// Cells the flow may still enter; at 0 it stops (and the caller falls back).
+    steps_left: usize,
 }
 
 impl State<'_> {
     fn recurse(&mut self, leaf: u32, prev: &Frame) {
+        if self.steps_left == 0 {
+            return;
+        }
+        self.steps_left -= 1;
         self.vis.cells.set(leaf as usize);
         self.on_stack.set(leaf as usize);
         // The separating planes of this frame's source and pass, built once for all
@@ -249,6 +277,9 @@ impl State<'_> {
         let mut seps: Option<Vec<Plane>> = None;
         let g = self.g;
         for &q in &g.leaf_portals[leaf as usize] {
+            if self.steps_left == 0 {
+                break;
+            }
             let q = q as usize;
             let tp = &g.portals[q];
             if !prev.portals.get(q) || self.on_stack.get(tp.to as usize) {
@@ -466,5 +497,53 @@ mod tests {
                 pvs.ones().collect::<Vec<_>>()
             );
         }
+    }
+
+    /// A flow over its budget answers the portal's flood (a superset of its flow);
+    /// within it, the flow itself.
+    #[test]
+    fn a_flow_over_its_budget_answers_its_flood() {
+        // Five cells along x, portals offset so that a line cannot pass them all.
+        let offset = |x: f64, y: f64| {
+            Winding::new(vec![
+                DVec3::new(x, y, 0.0),
+                DVec3::new(x, y + 1.0, 0.0),
+                DVec3::new(x, y + 1.0, 1.0),
+                DVec3::new(x, y, 1.0),
+            ])
+        };
+        let w = [
+            offset(0.0, 0.0),
+            offset(1.0, 0.9),
+            offset(2.0, 0.0),
+            offset(3.0, -0.9),
+        ];
+        let portals: Vec<_> = (0..4)
+            .map(|k| {
+                (
+                    &w[k],
+                    Plane::new(DVec3::X, k as f64),
+                    [k as u32, k as u32 + 1],
+                )
+            })
+            .collect();
+        let g = Graph::from_portals(5, portals);
+        let mightsee = might_see_all(&g);
+        let exact = flow_all(&g, &mightsee);
+        assert_eq!(
+            flow_all_within(&g, &mightsee, Some(1_000))
+                .iter()
+                .map(|s| &s.cells)
+                .collect::<Vec<_>>(),
+            exact.iter().map(|s| &s.cells).collect::<Vec<_>>()
+        );
+        let starved = flow_all_within(&g, &mightsee, Some(1));
+        let mut looser = false;
+        for (p, s) in starved.iter().enumerate() {
+            assert!(exact[p].cells.is_subset(&s.cells));
+            looser |= s.cells != exact[p].cells;
+            assert!(s.cells == exact[p].cells || s.cells == mightsee[p].cells);
+        }
+        assert!(looser, "some flow needs more than one step and falls back");
     }
 }
