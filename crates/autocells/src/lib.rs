@@ -373,20 +373,31 @@ pub const DEFAULT_FLOW_BUDGET: usize = 100_000;
 pub const MAX_CLUSTER_TRIANGLES: usize = 2048;
 
 /// The voxel grid of a level: on the world's lattice of multiples of `h` (origin
-/// included), `h` = `asked` doubled while the grid exceeds `max_voxels`. Levels are
-/// built on power-of-two grids, so their walls fall on voxel faces and close them
-/// ([`faces`]). One layer of padding: the border layer lies outside the bounding box
-/// (rule 3).
+/// included). `h` = `asked` when the grid fits `max_voxels`; otherwise the smallest
+/// `asked` × 1.05ᵏ that fits, or `asked` × 2ʲ (a power-of-two multiple, on a level's
+/// lattice: its walls fall on voxel faces and close them, [`faces`]) when that is at
+/// most [`LATTICE_SLACK`] times coarser. One layer of padding: the border layer lies
+/// outside the bounding box (rule 3).
 pub fn lattice_grid(min: DVec3, max: DVec3, asked: f64, max_voxels: usize) -> Grid {
     let lattice = |h: f64| {
         let lo = (min / h).floor() - DVec3::ONE;
         let hi = (max / h).ceil() + DVec3::ONE;
         (lo * h, (hi - lo).to_array().map(|d| d as usize))
     };
-    let mut h = asked;
-    while lattice(h).1.iter().product::<usize>() > max_voxels.max(27) {
-        h *= 2.0;
+    let fits = |h: f64| lattice(h).1.iter().product::<usize>() <= max_voxels.max(27);
+    let mut fine = asked;
+    while !fits(fine) {
+        fine *= 1.05;
     }
+    let mut two = asked;
+    while !fits(two) {
+        two *= 2.0;
+    }
+    let h = if two <= LATTICE_SLACK * fine {
+        two
+    } else {
+        fine
+    };
     let (origin, dims) = lattice(h);
     Grid {
         origin,
@@ -394,6 +405,10 @@ pub fn lattice_grid(min: DVec3, max: DVec3, asked: f64, max_voxels: usize) -> Gr
         dims,
     }
 }
+
+/// How much coarser than the finest voxel size the budget allows a power-of-two size
+/// may be and still be preferred ([`lattice_grid`]).
+pub const LATTICE_SLACK: f64 = 1.25;
 
 /// The cluster grid's side: 16 × the smallest hole the voxel budget allows for this
 /// scene (rooms-sized on a level, a few metres in a metric scene).
