@@ -376,14 +376,16 @@ pub fn voxelize_with(
         .collect();
     let axis = axis_votes(&grid, &state, &start, &tri_of, tris);
     let sees_front: Vec<bool> = axis.iter().map(|&x| x & AXIS_FRONT != 0).collect();
+    let solid_comp: Vec<bool> = votes
+        .iter()
+        .map(|&(f, b, _)| b > 0 && (f as f64) <= backface_tolerance * (f + b) as f64)
+        .collect();
+    stats.solid_components = solid_comp.iter().filter(|&&s| s).count();
     let mut leak = None;
     let mut worst_leak = 0;
     for (c, &(front, back, front_voxel)) in votes.iter().enumerate() {
         let hits = front + back;
-        let solid = back > 0 && (front as f64) <= backface_tolerance * hits as f64;
-        if solid {
-            stats.solid_components += 1;
-        } else if outside[c] && back * 4 >= hits && back > worst_leak {
+        if !solid_comp[c] && outside[c] && back * 4 >= hits && back > worst_leak {
             // An outside region sees the back of the geometry (≥ 25 %) yet some
             // fronts: the one with the most back hits is reported.
             if let Some(v) = front_voxel {
@@ -394,16 +396,11 @@ pub fn voxelize_with(
     }
     // Apply: mark solid voxels, whole components, then single voxels that see only
     // backs along the six axes.
-    let solid_comp: Vec<bool> = votes
-        .iter()
-        .map(|&(f, b, _)| b > 0 && (f as f64) <= backface_tolerance * (f + b) as f64)
-        .collect();
-    let votes = axis;
     for v in 0..n {
         let behind = if sees_front[v] || !axis_rule {
             0
         } else {
-            votes[v]
+            axis[v]
         };
         if state[v] == AIR && label[v] != u32::MAX && (solid_comp[label[v] as usize] || behind >= 2)
         {
