@@ -25,7 +25,7 @@ use rayon::prelude::*;
 use sightline_geom::DVec3;
 use sightline_portals::oracle::{sample_leaf, segment_clear, Rng};
 use sightline_portals::{Mode, Portals};
-use sightline_scene::import::bsp::BspLevel;
+use sightline_scene::import::bsp::{is_liquid, BspLevel};
 use sightline_scene::{Mesh, Object, Scene};
 use std::io::Write;
 
@@ -38,11 +38,6 @@ pub struct Soup {
     pub faces: Vec<u32>,
     /// Liquid faces left out.
     pub liquid_faces: usize,
-}
-
-/// Whether a face is a liquid surface (`*water…`, `*slime…`, `*lava…`, `*teleport…`).
-pub fn is_liquid(texture: &str) -> bool {
-    texture.starts_with('*')
 }
 
 /// The soup of `level`'s world faces (see the module doc).

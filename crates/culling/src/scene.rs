@@ -132,7 +132,10 @@ impl CullScene {
             let Geometry::Mesh(mesh) = &o.geometry else {
                 continue;
             };
-            if o.name.as_deref().is_some_and(|n| n.starts_with('*')) {
+            if o.name
+                .as_deref()
+                .is_some_and(sightline_scene::import::bsp::is_liquid)
+            {
                 continue;
             }
             for verts in surface_polygons(mesh) {

@@ -105,7 +105,11 @@ impl Portals {
                     plane = plane.flipped();
                 }
                 let w = Winding::new(f.polygon.iter().map(|p| DVec3::from(*p)).collect());
-                (w, plane, f.texture.starts_with('*'))
+                (
+                    w,
+                    plane,
+                    sightline_scene::import::bsp::is_liquid(&f.texture),
+                )
             })
             .collect();
         Ok(Portals {

@@ -78,7 +78,7 @@ fn oracle_misses(
                     break;
                 };
                 let front = (0..3).map(|i| (eye[i] - target[i]) * n[i]).sum::<f64>() > 0.0;
-                let two_sided = face.texture.starts_with('*');
+                let two_sided = sightline_scene::import::bsp::is_liquid(&face.texture);
                 if (front || two_sided) && segment_clear(level, eye, target) {
                     eprintln!("miss: leaf {} sees face {f} of leaf {l}", pvs.leaf);
                     misses += 1;

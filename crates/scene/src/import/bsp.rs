@@ -105,6 +105,12 @@ pub fn is_open(contents: i32) -> bool {
     )
 }
 
+/// Whether a texture is a liquid surface (`*water…`, `*slime…`, `*lava…`, `*teleport…`):
+/// see-through for visibility (vis floods through it), as Quake draws it.
+pub fn is_liquid(texture: &str) -> bool {
+    texture.starts_with('*')
+}
+
 /// A world face: its polygon and what it is made of.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BspFace {
