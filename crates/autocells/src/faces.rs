@@ -94,7 +94,10 @@ const COVER_EPS: f64 = 1e-9;
 /// Whether the unit square is covered by the union of the triangles: the square less
 /// each triangle in turn (convex differences: exact for overlapping triangles too)
 /// leaves no area.
-fn covered<'a>(square: Vec<[f64; 2]>, tris: impl Iterator<Item = &'a [[f64; 2]; 3]>) -> bool {
+pub(crate) fn covered<'a>(
+    square: Vec<[f64; 2]>,
+    tris: impl Iterator<Item = &'a [[f64; 2]; 3]>,
+) -> bool {
     let mut left = vec![square];
     for t in tris {
         // Counter-clockwise, so that the inside is left of every edge.

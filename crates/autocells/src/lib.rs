@@ -27,6 +27,8 @@ pub mod faces;
 pub mod judge;
 pub mod soup;
 pub mod testlevel;
+pub mod viewcells;
+pub mod volumetric;
 pub mod voxels;
 
 use cells::{greedy_boxes, portals, world_box, Portal, VoxelBox};
@@ -141,6 +143,9 @@ pub struct AutoCells {
     /// The scene's bounding box: viewpoints and targets lie in it.
     pub bounds: ViewCell,
     pub report: Report,
+    /// The triangles voxelized, and each one's cluster (scene object).
+    pub tris: Vec<[DVec3; 3]>,
+    pub tri_object: Vec<u32>,
 }
 
 impl AutoCells {
@@ -241,6 +246,8 @@ impl AutoCells {
                 max: b.max,
             },
             report,
+            tris,
+            tri_object,
         })
     }
 
@@ -340,7 +347,11 @@ impl AutoCells {
     /// in the void around the level sees only backs: neither is a viewpoint), clipped
     /// to the scene's bounding box, as a voxel cell; `None` when it has none.
     pub fn free_region(&self, c: usize) -> Option<Cell> {
-        let b = &self.boxes[c];
+        self.free_region_of(&self.boxes[c], c as u32)
+    }
+
+    /// The free space of any voxel box, as [`AutoCells::free_region`] (cell id `id`).
+    pub fn free_region_of(&self, b: &VoxelBox, id: u32) -> Option<Cell> {
         let g = &self.voxels.grid;
         let mut boxes = Vec::new();
         for z in b.lo[2]..b.hi[2] {
@@ -358,7 +369,67 @@ impl AutoCells {
                 }
             }
         }
-        VoxelCell::new(c as u32, boxes).map(Cell::Voxels)
+        VoxelCell::new(id, boxes).map(Cell::Voxels)
+    }
+}
+
+/// The occluders of the volumetric test ([`volumetric`]) and the voxels of every
+/// cluster, built once per level.
+pub struct Volumetric {
+    pub occluders: volumetric::Occluders,
+    pub clusters: volumetric::ClusterVoxels,
+    pub seconds: f64,
+}
+
+impl AutoCells {
+    /// The walkable viewcells of the level ([`viewcells`]), in voxel coordinates.
+    pub fn viewcells(&self, walker: &viewcells::Walker) -> Vec<VoxelBox> {
+        viewcells::walkable(&self.voxels, &self.tris, walker)
+    }
+
+    /// The occluders and cluster voxels of the volumetric test.
+    pub fn volumetric(&self) -> Volumetric {
+        let t = Instant::now();
+        let occluders = volumetric::Occluders::new(&self.voxels, &self.tris);
+        let clusters = volumetric::ClusterVoxels::new(&self.voxels, &self.tri_object, self.objects);
+        Volumetric {
+            occluders,
+            clusters,
+            seconds: t.elapsed().as_secs_f64(),
+        }
+    }
+
+    /// The clusters potentially visible from the voxel box `b` (a viewcell), sorted:
+    /// those the automatic cells it meets see through portals that the volumetric
+    /// test does not hide — the intersection of two conservative answers.
+    pub fn viewcell_pvs(&self, vol: &Volumetric, b: &VoxelBox) -> Vec<u32> {
+        let g = &self.voxels.grid;
+        let mut meets = Bits::new(self.len());
+        for z in b.lo[2]..b.hi[2] {
+            for y in b.lo[1]..b.hi[1] {
+                for x in b.lo[0]..b.hi[0] {
+                    let o = self.owner[g.index(x, y, z)];
+                    if o != u32::MAX {
+                        meets.set(o as usize);
+                    }
+                }
+            }
+        }
+        let mut sees = Bits::new(self.len());
+        for c in meets.ones() {
+            sees.or(&self.cell_pvs[c]);
+        }
+        let mut candidates = Bits::new(self.objects);
+        for c in sees.ones() {
+            for &o in &self.cell_clusters[c] {
+                candidates.set(o as usize);
+            }
+        }
+        candidates
+            .ones()
+            .filter(|&o| !vol.clusters.hidden(&vol.occluders, b, o))
+            .map(|o| o as u32)
+            .collect()
     }
 }
 

@@ -188,9 +188,10 @@ pub enum Command {
         /// every open leaf is stored).
         #[arg(long)]
         cells: Option<PathBuf>,
-        /// The method (listed below).
-        #[arg(long, default_value = "erosion")]
-        method: String,
+        /// The method (listed below); default `volumetric` on a mesh level (walkable
+        /// viewcells), `erosion` otherwise.
+        #[arg(long)]
+        method: Option<String>,
         #[arg(long)]
         resolution: Option<u32>,
         /// ext-proj: run the occlusion sweep.
@@ -215,6 +216,10 @@ pub enum Command {
         /// cells (scene units; default automatic, see docs/methods/auto-cells.md).
         #[arg(long)]
         smallest_hole: Option<f64>,
+        /// Mesh levels with `volumetric`: the viewer's eye above the floor (scene
+        /// units; default 1.7, or 3.5 voxels when the voxels are coarser).
+        #[arg(long)]
+        eye_height: Option<f64>,
     },
     /// Merge shard .pvs files into one.
     Merge {

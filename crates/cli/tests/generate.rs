@@ -258,7 +258,7 @@ fn demo_runs_end_to_end() {
     );
     let city_methods = sightline_methods::Method::ALL
         .iter()
-        .filter(|m| m.family() != sightline_core::Family::Portals)
+        .filter(|m| m.works_on(sightline_core::SceneKind::City))
         .count();
     assert_eq!(methods.len(), city_methods);
     // Measured against the ground truth, not claimed: no conservative method misses.

@@ -33,7 +33,7 @@ mod registry;
 pub use cell::{Cell, CellKind, ConvexCell, HalfSpace, VoxelCell};
 pub use registry::{
     DualRayOptions, ErosionOptions, ExtProjOptions, Family, IntoMethod, Knob, Method,
-    MethodOptions, Options, SampledOptions, METHOD_NAMES,
+    MethodOptions, Options, SampledOptions, SceneKind, METHOD_NAMES,
 };
 
 use sightline_geom::ViewCell;

@@ -20,8 +20,22 @@ pub enum Family {
     Sampled,
     /// Teller & Séquin 1991: cells and portals of a BSP level (`sightline-portals`).
     Portals,
+    /// Schaufler, Dorsey, Décoret & Sillion 2000: volumetric visibility with occluder
+    /// fusion on the voxels of a mesh level (`sightline-autocells`).
+    Volumetric,
     /// No culling at all.
     Baseline,
+}
+
+/// The kinds of scene with a cell layout of their own.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SceneKind {
+    /// Buildings and any scene given a cells file (viewcell boxes).
+    City,
+    /// A Quake `.bsp`: its leaves are the cells.
+    Bsp,
+    /// A mesh level (`.obj`, `.gltf`, `.glb`): automatic cells and walkable viewcells.
+    Mesh,
 }
 
 /// A knob a method takes: its key (for `--set key=value`, Python keywords and the
@@ -100,6 +114,9 @@ pub enum Method {
     Portals,
     /// The cheap flood bound of `portals` (always contains it).
     PortalsFast,
+    /// Walkable viewcells of a mesh level, volumetric occlusion with occluder fusion
+    /// intersected with the portal flood (Schaufler et al. 2000; mesh levels only).
+    Volumetric,
     /// The sampled visible set: aggressive, NOT conservative (the ground truth).
     Sampled,
     /// Every object: the no-culling baseline.
@@ -121,7 +138,7 @@ const NAMES: [&str; Method::ALL.len()] = {
 
 impl Method {
     /// Every method, in the order of the README's method table.
-    pub const ALL: [Method; 12] = [
+    pub const ALL: [Method; 13] = [
         Method::Erosion,
         Method::ErosionSegment,
         Method::ErosionCell,
@@ -132,6 +149,7 @@ impl Method {
         Method::ExtProj,
         Method::Portals,
         Method::PortalsFast,
+        Method::Volumetric,
         Method::Sampled,
         Method::All,
     ];
@@ -149,6 +167,7 @@ impl Method {
             Method::ExtProj => "ext-proj",
             Method::Portals => "portals",
             Method::PortalsFast => "portals-fast",
+            Method::Volumetric => "volumetric",
             Method::Sampled => "sampled",
             Method::All => "all",
         }
@@ -165,6 +184,7 @@ impl Method {
             Method::DualRay | Method::DualRayExact => Family::DualRay,
             Method::ExtProj => Family::ExtProj,
             Method::Portals | Method::PortalsFast => Family::Portals,
+            Method::Volumetric => Family::Volumetric,
             Method::Sampled => Family::Sampled,
             Method::All => Family::Baseline,
         }
@@ -184,6 +204,9 @@ impl Method {
             Method::Portals | Method::PortalsFast => {
                 "Teller & Séquin 1991; the course's cells-and-portals part (Find_Visible_Cells)"
             }
+            Method::Volumetric => {
+                "Schaufler, Dorsey, Décoret & Sillion 2000; the visibility course §7.1"
+            }
             Method::Sampled => "visibility survey §7.6 (aggressive sampling)",
             Method::All => "—",
         }
@@ -202,8 +225,20 @@ impl Method {
             Method::ExtProj => "extended projections on six planes with extended depth maps (--sweep: occlusion sweep)",
             Method::Portals => "BSP leaves and portals: leaf PVS through stabbable portal sequences (separating planes), faces no stabbing line reaches dropped",
             Method::PortalsFast => "BSP leaves and portals: the cheap portal flood (front/back tests only), always contains portals",
+            Method::Volumetric => "mesh levels: walkable viewcells, clusters hidden by opaque voxels, closed faces and planar patches (volumetric occlusion), within the portal flood",
             Method::Sampled => "the sampled visible set: NOT conservative, the ground truth",
             Method::All => "every object: the no-culling baseline",
+        }
+    }
+
+    /// Whether the method applies to a kind of scene: the portal family needs a level
+    /// (a BSP's leaves, or a mesh level's automatic cells), `volumetric` a mesh level;
+    /// the others take any scene with a cells file.
+    pub const fn works_on(self, kind: SceneKind) -> bool {
+        match self.family() {
+            Family::Portals => matches!(kind, SceneKind::Bsp | SceneKind::Mesh),
+            Family::Volumetric => matches!(kind, SceneKind::Mesh),
+            _ => matches!(kind, SceneKind::City | SceneKind::Mesh),
         }
     }
 
@@ -223,7 +258,7 @@ impl Method {
             },
             Family::ExtProj => &[RESOLUTION, SWEEP, PLANES],
             Family::Sampled => &[RESOLUTION, SAMPLES],
-            Family::Portals | Family::Baseline => &[],
+            Family::Portals | Family::Volumetric | Family::Baseline => &[],
         }
     }
 
@@ -284,7 +319,7 @@ impl Method {
                     samples: s.samples,
                 })
             }
-            Family::Portals | Family::Baseline => Options::None,
+            Family::Portals | Family::Volumetric | Family::Baseline => Options::None,
         };
         for (key, value) in &s.set {
             o.set(self, key, value).map_err(bad)?;

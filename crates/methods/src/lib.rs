@@ -69,6 +69,9 @@ pub fn create(
         (Family::Portals, _) => Err(MethodError::Other(format!(
             "{m} works on BSP levels: prepare it with sightline_portals::PortalMethod (the CLI does for a .bsp scene)"
         ))),
+        (Family::Volumetric, _) => Err(MethodError::Other(format!(
+            "{m} works on mesh levels: prepare it with sightline_autocells::AutoCells::walkable (the CLI does for a .obj/.gltf scene)"
+        ))),
         (_, o) => Err(MethodError::Other(format!(
             "{m}: options of another family ({o:?})"
         ))),

@@ -20,8 +20,8 @@ fn cell(a: [f64; 6]) -> ViewCell {
 fn methods(scene: &Arc<Scene>) -> Vec<(String, Box<dyn VisibilityMethod>)> {
     let mut out: Vec<(String, Box<dyn VisibilityMethod>)> = Method::ALL
         .into_iter()
-        // The portal family works on BSP levels only (`sightline-portals`).
-        .filter(|m| m.family() != sightline_core::Family::Portals)
+        // The level families are built from levels (`sightline-portals`, `-autocells`).
+        .filter(|m| m.works_on(sightline_core::SceneKind::City))
         .map(|m| {
             let made = create(m, scene.clone(), &MethodOptions::default());
             (m.name().to_string(), made.expect("method"))

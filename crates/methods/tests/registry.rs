@@ -33,10 +33,11 @@ fn with(set: &[(&str, &str)]) -> MethodOptions {
 fn every_registered_method_is_built_by_name() {
     let s = scene();
     for m in Method::ALL {
-        if m.family() == Family::Portals {
-            // Built by sightline-portals from a BSP level, above this crate: a clear error.
+        if m.family() == Family::Portals || m.family() == Family::Volumetric {
+            // Built from a level (sightline-portals, sightline-autocells), above this
+            // crate: a clear error naming where.
             let e = create(m.name(), s.clone(), &MethodOptions::default()).err();
-            assert!(e.is_some_and(|e| e.to_string().contains("portals")));
+            assert!(e.is_some_and(|e| e.to_string().contains("levels")));
             continue;
         }
         let built = create(m.name(), s.clone(), &MethodOptions::default()).unwrap();

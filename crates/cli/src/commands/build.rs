@@ -5,7 +5,7 @@ use crate::common::{load_scene, method_options, print_json, progress};
 use anyhow::Context;
 use serde::Serialize;
 use sightline_geom::{DVec3, ViewCell};
-use sightline_methods::{create, MethodOptions};
+use sightline_methods::{create, Method, MethodOptions};
 use sightline_pvs::build::{journal_path, write_atomic};
 use sightline_pvs::{build, merge, BuildOptions, PvsFile, Shard};
 use std::path::{Path, PathBuf};
@@ -26,7 +26,29 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
             resume,
             shard,
             smallest_hole,
+            eye_height,
         } => {
+            let mesh = crate::commands::mesh::is_mesh(&scene.scene);
+            let method = method.unwrap_or_else(|| {
+                if mesh {
+                    Method::Volumetric.name().to_string()
+                } else {
+                    Method::Erosion.name().to_string()
+                }
+            });
+            if mesh && method == Method::Volumetric.name() {
+                anyhow::ensure!(
+                    cells.is_none() && shard.is_none() && !resume,
+                    "a mesh level is built whole on its walkable viewcells: no --cells, --shard or --resume"
+                );
+                return crate::commands::mesh::build_volumetric(
+                    &scene,
+                    smallest_hole,
+                    eye_height,
+                    &out,
+                    quiet,
+                );
+            }
             let opts = method_options(&method, resolution, sweep, planes, &set)?;
             if let Some(full) = crate::commands::mesh::portal_mode(&scene.scene, &method) {
                 anyhow::ensure!(
@@ -169,6 +191,11 @@ struct QueryReport {
     /// Mesh levels: the source objects of the visible clusters (`info`'s order).
     #[serde(skip_serializing_if = "Option::is_none")]
     visible_sources: Option<Vec<u32>>,
+    /// Files with walkable viewcells (`volumetric`): `true` when the point lies in no
+    /// viewcell and the answer is a free-space cell's (a flying camera: conservative,
+    /// looser), `false` in a walkable viewcell.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    free_space: Option<bool>,
 }
 
 fn run_query(path: &Path, at: [f64; 3], json: bool) -> anyhow::Result<()> {
@@ -197,6 +224,7 @@ fn run_query(path: &Path, at: [f64; 3], json: bool) -> anyhow::Result<()> {
         ),
         visible,
         visible_leaves: file.visible_leaves(index).map(<[u32]>::to_vec),
+        free_space: crate::commands::mesh::free_space(&file.header().params, index),
     };
     if json {
         print_json(&report)
@@ -209,6 +237,11 @@ fn run_query(path: &Path, at: [f64; 3], json: bool) -> anyhow::Result<()> {
             .visible_leaves
             .as_ref()
             .map_or(String::new(), |l| format!(", {} leaves", l.len()));
+        let leaves = match report.free_space {
+            Some(true) => format!("{leaves}, free space (not a walkable viewcell: looser)"),
+            Some(false) => format!("{leaves}, walkable viewcell"),
+            None => leaves,
+        };
         println!(
             "cell {index} [{}, {}, {}, {}, {}, {}] ({}): {} of {} objects visible{leaves}",
             c[0],

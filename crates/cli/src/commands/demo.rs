@@ -127,7 +127,7 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
     let scene = Arc::new(scene);
     let rows: Vec<MethodRow> = Method::ALL
         .iter()
-        .filter(|m| m.family() != sightline_core::Family::Portals)
+        .filter(|m| m.works_on(sightline_core::SceneKind::City))
         .map(|&m| run_method(m, &scene, &truths, quiet))
         .collect();
     let table = render_table(&rows);

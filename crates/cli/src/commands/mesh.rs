@@ -24,6 +24,138 @@ pub fn is_mesh(path: &Path) -> bool {
     })
 }
 
+/// The default eye height of a viewer on a mesh level: 1.7 (metres), or 3.5 smallest
+/// holes when the voxels are coarser (a level in game units: pandora's 4-unit voxels
+/// give 14, a Sauerbraten player's eye).
+pub fn default_eye_height(smallest_hole: f64) -> f64 {
+    (3.5 * smallest_hole).max(1.7)
+}
+
+/// Width of the walkable viewcells, in voxels.
+pub const VIEWCELL_WIDTH: usize = 8;
+
+/// `build LEVEL.obj -o L.pvs` with `volumetric` (the default on a mesh level): the
+/// walkable viewcells first, each with its volumetric ∩ portal PVS, then every
+/// automatic cell with its portal PVS (any other point of free space: a flying
+/// camera, flagged `free-space` by `query`). Parameters: the smallest hole, the eye
+/// height, `viewcells` (how many cells are walkable viewcells), the cluster → source
+/// mapping.
+pub fn encode_volumetric(
+    scene: &SceneArg,
+    smallest_hole: Option<f64>,
+    eye_height: Option<f64>,
+    quiet: bool,
+) -> anyhow::Result<(Level, usize)> {
+    use rayon::prelude::*;
+    let (clustered, auto) = prepare(scene, smallest_hole, false, quiet)?;
+    let h = auto.report.smallest_hole;
+    let eye = eye_height.unwrap_or_else(|| default_eye_height(h));
+    anyhow::ensure!(
+        eye.is_finite() && eye > 0.0,
+        "--eye-height must be a positive number of scene units, got {eye}"
+    );
+    let walker = sightline_autocells::viewcells::Walker {
+        eye_height: eye,
+        width: VIEWCELL_WIDTH,
+    };
+    let viewcells = auto.viewcells(&walker);
+    if viewcells.is_empty() && !quiet {
+        eprintln!("warning: no walkable floor (no upward surface with room for the eye at {eye}): every cell is free space");
+    }
+    let vol = auto.volumetric();
+    let bar = crate::common::progress(viewcells.len() as u64, quiet, "viewcells");
+    let mut sets: Vec<roaring::RoaringBitmap> = viewcells
+        .par_iter()
+        .map(|b| {
+            let s = auto.viewcell_pvs(&vol, b).into_iter().collect();
+            bar.inc(1);
+            s
+        })
+        .collect();
+    bar.finish_and_clear();
+    sets.extend(
+        (0..auto.len()).map(|c| auto.pvs(c).into_iter().collect::<roaring::RoaringBitmap>()),
+    );
+    let mut boxes: Vec<ViewCell> = viewcells
+        .iter()
+        .map(|b| sightline_autocells::cells::world_box(&auto.voxels, b))
+        .collect();
+    boxes.extend(auto.cell_boxes());
+    let cells: Vec<sightline_core::Cell> =
+        boxes.into_iter().map(sightline_core::Cell::Box).collect();
+    let params = vec![
+        ("smallest_hole".to_string(), h.to_string()),
+        ("eye_height".to_string(), eye.to_string()),
+        ("viewcells".to_string(), viewcells.len().to_string()),
+        ("sources".to_string(), join(&clustered.source)),
+        (
+            "source_names".to_string(),
+            serde_json::to_string(&clustered.source_names)?,
+        ),
+    ];
+    let header = sightline_pvs::Header::new(
+        clustered.scene.fingerprint(),
+        Method::Volumetric.name(),
+        params,
+        auto.objects,
+        cells.len(),
+    );
+    let present: Vec<u32> = (0..cells.len() as u32).collect();
+    let bytes = sightline_pvs::format::encode_cells(
+        &header,
+        &cells,
+        &present,
+        &sets,
+        &sightline_pvs::format::EncodeOptions::default(),
+    )?;
+    let n = viewcells.len();
+    Ok((
+        Level {
+            clustered,
+            auto,
+            bytes,
+        },
+        n,
+    ))
+}
+
+/// `build LEVEL.obj -o L.pvs --method volumetric` (module doc of [`encode_volumetric`]).
+pub fn build_volumetric(
+    scene: &SceneArg,
+    smallest_hole: Option<f64>,
+    eye_height: Option<f64>,
+    out: &Path,
+    quiet: bool,
+) -> anyhow::Result<()> {
+    let t = Instant::now();
+    let (level, viewcells) = encode_volumetric(scene, smallest_hole, eye_height, quiet)?;
+    sightline_pvs::build::write_atomic(out, &level.bytes)
+        .with_context(|| format!("cannot write {}", out.display()))?;
+    if !quiet {
+        let r = &level.auto.report;
+        eprintln!(
+            "wrote {}: {viewcells} walkable viewcells and {} free-space cells, {} clusters of {} source objects, smallest hole {:.3}, method {}, {} bytes, {:.1} s",
+            out.display(),
+            r.cells,
+            level.auto.objects,
+            level.clustered.source_names.len(),
+            r.smallest_hole,
+            Method::Volumetric.name(),
+            level.bytes.len(),
+            t.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+/// Whether `index` of a `.pvs` is a free-space cell (not a walkable viewcell): `Some`
+/// only for files with walkable viewcells (`volumetric`).
+pub fn free_space(params: &[(String, String)], index: usize) -> Option<bool> {
+    let (_, n) = params.iter().find(|(k, _)| k == "viewcells")?;
+    let n: usize = n.parse().ok()?;
+    Some(index >= n)
+}
+
 /// `Some(full)` when `scene` is a mesh level and `method` a portal method.
 pub fn portal_mode(scene: &Path, method: &str) -> Option<bool> {
     if !is_mesh(scene) {
