@@ -125,3 +125,36 @@ fn check_judges_the_automatic_cells_by_the_truth() {
     assert_ne!(code, 0);
     assert!(err.starts_with("error:"), "{err}");
 }
+
+#[test]
+fn build_defaults_to_walkable_viewcells_on_a_mesh_level() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = level(dir.path());
+    let pvs = dir.path().join("walk.pvs");
+    let pvs_s = pvs.to_string_lossy().into_owned();
+    // No --method: volumetric on the walkable viewcells.
+    let (code, _, err) = sightline(&["build", &obj, "--smallest-hole", "0.5", "-o", &pvs_s]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("walkable viewcells"), "{err}");
+    // A viewer's eye in room A: a walkable viewcell; crate-d, around two corners, hidden.
+    let (code, out, err) = sightline(&["query", &pvs_s, "--at=-4.5,-2,1.7", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let q: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(q["method"], "volumetric");
+    assert_eq!(q["free_space"], false, "{q}");
+    let sources = ids(&q["visible_sources"]);
+    assert!(sources.contains(&3) && !sources.contains(&5), "{sources:?}");
+    // Under the ceiling, above any eye: a free-space cell, flagged, still an answer.
+    let (code, out, err) = sightline(&["query", &pvs_s, "--at=-4.5,-2,2.9", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let f: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(f["free_space"], true, "{f}");
+    assert!(ids(&f["visible"]).len() >= ids(&q["visible"]).len());
+    let (code, out, _) = sightline(&["query", &pvs_s, "--at=-4.5,-2,2.9"]);
+    assert_eq!(code, 0);
+    assert!(out.contains("free space"), "{out}");
+    // A bad eye height is one error line.
+    let (code, _, err) = sightline(&["build", &obj, "--eye-height", "-1", "-o", &pvs_s]);
+    assert_ne!(code, 0);
+    assert!(err.starts_with("error:"), "{err}");
+}
