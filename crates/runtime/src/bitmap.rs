@@ -52,9 +52,15 @@ impl<'a> Reader<'a> {
     }
 }
 
-/// Append the ids of the serialized bitmap `bytes` to `out` (cleared first), ascending.
+/// The ids of the serialized bitmap `bytes` into `out` (cleared first), ascending.
 pub fn decode_into(bytes: &[u8], out: &mut Vec<u32>) -> Result<(), BadBitmap> {
     out.clear();
+    decode_with(bytes, |v| out.push(v))
+}
+
+/// Call `f` with each id of the serialized bitmap `bytes`, ascending (on an error, `f`
+/// may have seen some of them).
+pub fn decode_with(bytes: &[u8], mut f: impl FnMut(u32)) -> Result<(), BadBitmap> {
     let mut r = Reader { bytes, at: 0 };
     let cookie = r.u32()?;
     let (size, has_offsets, runs) = if cookie == SERIAL_COOKIE_NO_RUNCONTAINER {
@@ -100,7 +106,7 @@ pub fn decode_into(bytes: &[u8], out: &mut Vec<u32>) -> Result<(), BadBitmap> {
                 {
                     return Err(BadBitmap("runs overlap or touch"));
                 }
-                out.extend((s as u32..=end as u32).map(|v| high | v));
+                (s as u32..=end as u32).for_each(|v| f(high | v));
             }
         } else if cardinality <= ARRAY_LIMIT {
             let values = r.take(cardinality * 2)?;
@@ -110,21 +116,24 @@ pub fn decode_into(bytes: &[u8], out: &mut Vec<u32>) -> Result<(), BadBitmap> {
                 if prev.replace(v).is_some_and(|p| v <= p) {
                     return Err(BadBitmap("array container is not strictly ascending"));
                 }
-                out.push(high | v as u32);
+                f(high | v as u32);
             }
         } else {
             let words = r.take(BITMAP_BYTES)?;
-            let before = out.len();
+            let word = |b: &[u8]| u64::from_le_bytes(std::array::from_fn(|k| b[k]));
+            let ones: usize = words
+                .chunks_exact(8)
+                .map(|b| word(b).count_ones() as usize)
+                .sum();
+            if ones != cardinality {
+                return Err(BadBitmap("bitmap cardinality does not match"));
+            }
             for (w, b) in words.chunks_exact(8).enumerate() {
-                let mut bits = u64::from_le_bytes(std::array::from_fn(|k| b[k]));
+                let mut bits = word(b);
                 while bits != 0 {
-                    let t = bits.trailing_zeros();
-                    out.push(high | (w as u32 * 64 + t));
+                    f(high | (w as u32 * 64 + bits.trailing_zeros()));
                     bits &= bits - 1;
                 }
-            }
-            if out.len() - before != cardinality {
-                return Err(BadBitmap("bitmap cardinality does not match"));
             }
         }
     }

@@ -2,7 +2,7 @@
 //! (owned, or a memory map with the `mmap` feature), and point location, rows, leaves,
 //! neighbours and the source mapping answered without allocating.
 
-use crate::bitmap::{decode_into, symmetric_difference};
+use crate::bitmap::{decode_into, decode_with, symmetric_difference};
 use crate::error::{corrupt, RuntimeError};
 use crate::query::Query;
 use crate::wire::{
@@ -386,21 +386,19 @@ impl Pvs {
             )));
         };
         q.attach(self.id);
+        let words = (self.header.object_count as usize).div_ceil(64);
+        if words <= 2 * self.table.count[rank] as usize + 64
+            && self.dense_row(q, rank, words, out)?
+        {
+            return Ok(());
+        }
         let mut r = rank;
         for _ in 0..CHAIN_LIMIT {
             self.decode_payload(q, r)?;
             symmetric_difference(out, &q.payload, &mut q.xor);
             std::mem::swap(out, &mut q.xor);
             match self.table.reference[r] {
-                0 => {
-                    if out.len() != self.table.count[rank] as usize
-                        || out.last().is_some_and(|&m| m >= self.header.object_count)
-                    {
-                        out.clear();
-                        return corrupt(format!("cell {cell}: decoded set does not match"));
-                    }
-                    return Ok(());
-                }
+                0 => return self.check_row(cell, rank, out),
                 reference => match self.stored_rank(reference - 1) {
                     Some(next) => r = next,
                     None => {
@@ -412,6 +410,77 @@ impl Pvs {
         }
         out.clear();
         corrupt(format!("cell {cell}: delta chain too long or cyclic"))
+    }
+
+    /// The final check of a decoded row: its stated size, ids below the object count.
+    fn check_row(&self, cell: u32, rank: usize, out: &mut Vec<u32>) -> Result<(), RuntimeError> {
+        if out.len() != self.table.count[rank] as usize
+            || out.last().is_some_and(|&m| m >= self.header.object_count)
+        {
+            out.clear();
+            return corrupt(format!("cell {cell}: decoded set does not match"));
+        }
+        Ok(())
+    }
+
+    /// The row of stored cell `rank` XORed into a bitset of the objects (`words` words),
+    /// then read out: cheaper than merging sorted lists when the bitset is small next
+    /// to the row. `Ok(false)` leaves the row to the merging path: a payload holds an
+    /// id beyond the object count (only a corrupt file's XOR could cancel it, and the
+    /// merging path decides exactly as `sightline-pvs` does) or the chain is not
+    /// well-formed (the merging path reports the error).
+    fn dense_row(
+        &self,
+        q: &mut Query,
+        rank: usize,
+        words: usize,
+        out: &mut Vec<u32>,
+    ) -> Result<bool, RuntimeError> {
+        q.marks.clear();
+        q.marks.resize(words, 0);
+        let limit = self.header.object_count;
+        let mut r = rank;
+        for _ in 0..CHAIN_LIMIT {
+            let slot = self.block(q, self.table.block[r])?;
+            let (o, l) = (self.table.offset[r] as usize, self.table.len[r] as usize);
+            let Some(bytes) = q.blocks[slot].1.get(o..o + l) else {
+                return Ok(false);
+            };
+            let marks = &mut q.marks;
+            let mut beyond = false;
+            let decoded = decode_with(bytes, |v| {
+                if v < limit {
+                    marks[v as usize / 64] ^= 1 << (v % 64);
+                } else {
+                    beyond = true;
+                }
+            });
+            if decoded.is_err() || beyond {
+                return Ok(false);
+            }
+            match self.table.reference[r] {
+                0 => {
+                    out.clear();
+                    for (w, &bits) in q.marks.iter().enumerate() {
+                        let mut bits = bits;
+                        while bits != 0 {
+                            out.push(w as u32 * 64 + bits.trailing_zeros());
+                            bits &= bits - 1;
+                        }
+                    }
+                    if out.len() != self.table.count[rank] as usize {
+                        out.clear();
+                        return Ok(false);
+                    }
+                    return Ok(true);
+                }
+                reference => match self.stored_rank(reference - 1) {
+                    Some(next) => r = next,
+                    None => return Ok(false),
+                },
+            }
+        }
+        Ok(false)
     }
 
     /// Decode the payload of stored cell `rank` into `q.payload`.
