@@ -376,7 +376,9 @@ pub extern "C" fn sightline_neighbours(
                 format!("no cell {cell}"),
             ));
         }
-        fill(h.pvs.neighbours(cell), buf, cap, len_out)
+        let mut s = scratch(h);
+        h.pvs.neighbours_into(cell, &mut s.list);
+        fill(&s.list, buf, cap, len_out)
     })
 }
 

@@ -76,9 +76,6 @@ pub struct Pvs {
     /// LEAF section: `stored + 1` offsets into `leaves`.
     leaf_offsets: Option<Vec<u32>>,
     leaves: Vec<u32>,
-    /// Cells whose closed boxes touch, in compressed-row form.
-    neighbour_offsets: Vec<u32>,
-    neighbours: Vec<u32>,
     sources: Option<Vec<u32>>,
     source_names: Option<Vec<String>>,
     data: Section,
@@ -108,8 +105,9 @@ impl Pvs {
         #[cfg(feature = "mmap")]
         {
             let file = std::fs::File::open(path).map_err(io)?;
-            // SAFETY: the map is read-only; a file changed underneath by another process
-            // can only make checksums fail or answers change, every read is bounds-checked.
+            // SAFETY: the map is read-only and every read is bounds-checked against its
+            // length; the caller must not truncate the file while it is open (a mapped
+            // page past the end of a shrunk file faults, as with any memory map).
             let map = unsafe { memmap2::Mmap::map(&file) }.map_err(io)?;
             Self::from_storage(Bytes::Mapped(map))
         }
@@ -227,7 +225,7 @@ impl Pvs {
             }
             (Some(_), None) => (0..n as u32).map(|i| (i, i)).collect(),
         };
-        let mut pvs = Pvs {
+        Ok(Pvs {
             id: NEXT_FILE_ID.fetch_add(1, Ordering::Relaxed),
             header,
             boxes,
@@ -238,17 +236,13 @@ impl Pvs {
             voxel_bounds,
             leaf_offsets,
             leaves,
-            neighbour_offsets: Vec::new(),
-            neighbours: Vec::new(),
             sources,
             source_names,
             data,
             bytes,
             gameplay: OnceLock::new(),
             by_source_id,
-        };
-        pvs.build_neighbours();
-        Ok(pvs)
+        })
     }
 
     /// The HEAD section: fingerprint, method, parameters, counts, shard.
@@ -547,42 +541,30 @@ impl Pvs {
     }
 
     /// The cells whose closed boxes touch or overlap cell `cell`'s (itself excluded),
-    /// ascending: the rows a walking client prefetches. Empty for an unknown cell.
-    pub fn neighbours(&self, cell: u32) -> &[u32] {
-        let i = cell as usize;
-        if i >= self.boxes.len() {
-            return &[];
-        }
-        &self.neighbours[self.neighbour_offsets[i] as usize..self.neighbour_offsets[i + 1] as usize]
-    }
-
-    fn build_neighbours(&mut self) {
-        let n = self.boxes.len();
-        let mut offsets = Vec::with_capacity(n + 1);
-        let mut out: Vec<u32> = Vec::new();
-        offsets.push(0u32);
-        let mut seen: Vec<u32> = Vec::new();
-        for (i, b) in self.boxes.iter().enumerate() {
-            let tol = extent(b).max(1.0) * SLACK;
-            let (x0, y0) = self.grid.bucket_of(b[0] - tol, b[1] - tol);
-            let (x1, y1) = self.grid.bucket_of(b[3] + tol, b[4] + tol);
-            seen.clear();
-            for by in y0..=y1 {
-                for bx in x0..=x1 {
-                    for &j in self.grid.bucket(bx, by) {
-                        if j as usize != i && touch(b, &self.boxes[j as usize], tol) {
-                            seen.push(j);
-                        }
-                    }
-                }
+    /// ascending, into `out`: the rows a walking client prefetches. Found through the
+    /// spatial index on each call (nothing is precomputed at open, so a hostile file of
+    /// overlapping cells costs only the calls that ask); empty for an unknown cell.
+    pub fn neighbours_into(&self, cell: u32, out: &mut Vec<u32>) {
+        out.clear();
+        let Some(b) = self.boxes.get(cell as usize) else {
+            return;
+        };
+        let tol = extent(b).max(1.0) * SLACK;
+        let (x0, y0) = self.grid.bucket_of(b[0] - tol, b[1] - tol);
+        let (x1, y1) = self.grid.bucket_of(b[3] + tol, b[4] + tol);
+        for by in y0..=y1 {
+            for bx in x0..=x1 {
+                out.extend(
+                    self.grid
+                        .bucket(bx, by)
+                        .iter()
+                        .copied()
+                        .filter(|&j| j != cell && touch(b, &self.boxes[j as usize], tol)),
+                );
             }
-            seen.sort_unstable();
-            seen.dedup();
-            out.extend_from_slice(&seen);
-            offsets.push(out.len() as u32);
         }
-        self.neighbour_offsets = offsets;
-        self.neighbours = out;
+        out.sort_unstable();
+        out.dedup();
     }
 
     /// The mesh level's cluster → source object map (parameter `sources`), if any.

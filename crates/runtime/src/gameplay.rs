@@ -44,6 +44,8 @@ pub(crate) struct Index {
     rows: Vec<u32>,
     inv_offsets: Vec<usize>,
     inv: Vec<u32>,
+    /// One more than the largest id in any row.
+    objects: usize,
 }
 
 impl Index {
@@ -61,7 +63,9 @@ impl Index {
             }
             row_offsets.push(rows.len());
         }
-        let objects = pvs.object_count() as usize;
+        // Sized by the largest id present, not the header's object count (a hostile
+        // header may claim billions of objects).
+        let objects = rows.iter().max().map_or(0, |&m| m as usize + 1);
         let mut counts = vec![0usize; objects + 1];
         for &o in &rows {
             counts[o as usize + 1] += 1;
@@ -83,6 +87,7 @@ impl Index {
             rows,
             inv_offsets,
             inv,
+            objects,
         })
     }
 
@@ -280,7 +285,7 @@ impl Pvs {
                 return Err(e);
             }
         };
-        reset(&mut q.marks, self.object_count() as usize);
+        reset(&mut q.marks, index.objects);
         for &c in &cells {
             for &o in index.row(c) {
                 mark(&mut q.marks, o);

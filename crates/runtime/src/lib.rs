@@ -23,7 +23,9 @@
 //! let mut row = Vec::new();
 //! if let Some(cell) = pvs.locate([15.0, 5.0, 1.7]) {
 //!     pvs.visible_into(&mut q, cell, &mut row)?; // no allocation once `row` has grown
-//!     for &n in pvs.neighbours(cell) {
+//!     let mut around = Vec::new();
+//!     pvs.neighbours_into(cell, &mut around);
+//!     for &n in &around {
 //!         let _prefetch = pvs.visible(&mut q, n)?;
 //!     }
 //! }
