@@ -486,6 +486,26 @@ class PvsFile:
     def __getitem__(self, index: int) -> np.ndarray:
         return self.pvs(index)
 
+    def can_see(self, a: int, b: int) -> bool:
+        """Whether cell ``a`` may see cell ``b``, as ``sightline query --can-see A,B``.
+
+        Never ``False`` where the stored sets admit a sight line: through the visible
+        leaves of a BSP level's file (conservative), else through an object both cells'
+        sets share (conservative in closed scenes; see ``docs/engines.md``).
+        """
+        return self._native.can_see(int(a), int(b))
+
+    def seen_by(self, x: float, y: float, z: float) -> np.ndarray | None:
+        """The cells that may see the point, as ``sightline query --seen-by X,Y,Z``
+        (uint32 cell indices; ``None`` when no cell contains the point)."""
+        cells = self._native.seen_by(float(x), float(y), float(z))
+        return None if cells is None else _ids(cells)
+
+    def secondary(self, index: int) -> np.ndarray:
+        """The secondary PVS of cell ``index``: the union of the sets of the cells that
+        may see it, as ``sightline query --secondary CELL`` (uint32 ids)."""
+        return _ids(self._native.secondary(int(index)))
+
     def query(self, x: float, y: float, z: float) -> PvsQuery:
         """The cell containing ``(x, y, z)`` and its set, as ``sightline query``.
         Raises :class:`CellError` if no cell contains the point (see :meth:`locate`).

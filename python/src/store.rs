@@ -267,6 +267,8 @@ pub fn check(
 pub struct NativePvsFile {
     file: PvsFile,
     path: String,
+    /// The same file through `sightline-runtime`, opened on the first gameplay query.
+    runtime: std::sync::OnceLock<Result<sightline_runtime::Pvs, String>>,
 }
 
 #[pymethods]
@@ -277,6 +279,7 @@ impl NativePvsFile {
         Ok(NativePvsFile {
             file,
             path: path.display().to_string(),
+            runtime: std::sync::OnceLock::new(),
         })
     }
 
@@ -337,6 +340,52 @@ impl NativePvsFile {
         Ok(PyBytes::new(py, &ids_to_bytes(&ids)))
     }
 
+    /// Whether cell `a` may see cell `b` (the guarantee of `sightline_runtime::gameplay`).
+    fn can_see(&self, py: Python<'_>, a: u32, b: u32) -> PyResult<bool> {
+        self.check_cell(a)?;
+        self.check_cell(b)?;
+        detached(py, || {
+            let pvs = self.runtime()?;
+            pvs.can_see(&mut sightline_runtime::Query::new(), a, b)
+                .map_err(|e| err(Kind::Pvs, format!("{}: {e}", self.path)))
+        })
+    }
+
+    /// The cells that may see the point `(x, y, z)` as little-endian `u32` bytes; `None`
+    /// when no cell holds the point.
+    fn seen_by<'py>(
+        &self,
+        py: Python<'py>,
+        x: f64,
+        y: f64,
+        z: f64,
+    ) -> PyResult<Option<Bound<'py, PyBytes>>> {
+        let cells = detached(py, || {
+            let pvs = self.runtime()?;
+            let mut out = Vec::new();
+            let q = &mut sightline_runtime::Query::new();
+            let cell = pvs
+                .cells_seeing_point_into(q, [x, y, z], &mut out)
+                .map_err(|e| err(Kind::Pvs, format!("{}: {e}", self.path)))?;
+            Ok(cell.map(|_| out))
+        })?;
+        Ok(cells.map(|c| PyBytes::new(py, &ids_to_bytes(&c))))
+    }
+
+    /// The secondary PVS of cell `index` (the union of the sets of the cells that may
+    /// see it) as little-endian `u32` bytes.
+    fn secondary<'py>(&self, py: Python<'py>, index: u32) -> PyResult<Bound<'py, PyBytes>> {
+        self.check_cell(index)?;
+        let ids = detached(py, || {
+            let pvs = self.runtime()?;
+            let mut out = Vec::new();
+            pvs.secondary_into(&mut sightline_runtime::Query::new(), index, &mut out)
+                .map_err(|e| err(Kind::Pvs, format!("{}: {e}", self.path)))?;
+            Ok(out)
+        })?;
+        Ok(PyBytes::new(py, &ids_to_bytes(&ids)))
+    }
+
     /// Decode every stored cell and check every checksum.
     fn verify(&self, py: Python<'_>) -> PyResult<()> {
         detached(py, || {
@@ -344,5 +393,25 @@ impl NativePvsFile {
                 .verify()
                 .map_err(|e| err(Kind::Pvs, format!("{}: {e}", self.path)))
         })
+    }
+}
+
+impl NativePvsFile {
+    fn runtime(&self) -> PyResult<&sightline_runtime::Pvs> {
+        self.runtime
+            .get_or_init(|| sightline_runtime::Pvs::open(&self.path).map_err(|e| e.to_string()))
+            .as_ref()
+            .map_err(|e| err(Kind::Pvs, format!("{}: {e}", self.path)))
+    }
+
+    fn check_cell(&self, cell: u32) -> PyResult<()> {
+        let n = self.file.cells().len();
+        if cell as usize >= n {
+            return Err(err(
+                Kind::Cell,
+                format!("cell {cell} is out of range ({} has {n} cells)", self.path),
+            ));
+        }
+        Ok(())
     }
 }

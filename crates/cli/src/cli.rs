@@ -61,6 +61,20 @@ fn parse_cell(s: &str) -> Result<ViewCell, String> {
     s.parse::<ViewCell>().map_err(|e| e.to_string())
 }
 
+fn parse_cell_pair(s: &str) -> Result<[u32; 2], String> {
+    match s.split_once(',') {
+        Some((a, b)) => {
+            let cell = |v: &str| {
+                v.trim()
+                    .parse::<u32>()
+                    .map_err(|_| format!("'{v}' is not a cell number"))
+            };
+            Ok([cell(a)?, cell(b)?])
+        }
+        None => Err(format!("expected A,B (two cell numbers), got '{s}'")),
+    }
+}
+
 fn parse_point(s: &str) -> Result<[f64; 3], String> {
     let v: Vec<f64> = s
         .split(',')
@@ -228,12 +242,23 @@ pub enum Command {
         #[arg(short, long)]
         out: PathBuf,
     },
-    /// PVS of the cell containing a point.
+    /// PVS of the cell containing a point, or gameplay queries on the cells.
     Query {
         pvs: PathBuf,
         /// The point `X,Y,Z`.
+        #[arg(long, value_parser = parse_point, allow_hyphen_values = true,
+              required_unless_present_any = ["can_see", "seen_by", "secondary"],
+              conflicts_with_all = ["can_see", "seen_by", "secondary"])]
+        at: Option<[f64; 3]>,
+        /// Whether cell A may see cell B (`A,B`; docs/engines.md states the guarantee).
+        #[arg(long, value_parser = parse_cell_pair)]
+        can_see: Option<[u32; 2]>,
+        /// The cells that may see the point `X,Y,Z`.
         #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
-        at: [f64; 3],
+        seen_by: Option<[f64; 3]>,
+        /// The secondary PVS of a cell: the union of the PVS of the cells that may see it.
+        #[arg(long)]
+        secondary: Option<u32>,
         #[arg(long)]
         json: bool,
     },

@@ -14,6 +14,7 @@ use crate::shapes::ShapeTable;
 use roaring::RoaringBitmap;
 use sightline_core::Cell;
 use sightline_geom::{DVec3, ViewCell};
+use sightline_runtime::bitmap;
 use sightline_scene::Scene;
 use std::fs::File;
 use std::os::unix::fs::FileExt;
@@ -275,24 +276,34 @@ impl PvsFile {
 
     /// The sorted PVS of cell `cell` (an error if this shard does not store it).
     pub fn pvs(&self, cell: usize) -> Result<Vec<u32>, PvsError> {
-        Ok(self.bitmap(cell)?.iter().collect())
+        self.sorted(cell)
     }
 
     /// The PVS of cell `cell` as a roaring bitmap.
     pub fn bitmap(&self, cell: usize) -> Result<RoaringBitmap, PvsError> {
+        let set = self.sorted(cell)?;
+        RoaringBitmap::from_sorted_iter(set)
+            .map_err(|_| PvsError::Corrupt(format!("cell {cell}: decoded set does not match")))
+    }
+
+    /// The sorted PVS of cell `cell`: its payload and those of its references decoded
+    /// and XORed by `sightline-runtime`, the code engines read rows with.
+    fn sorted(&self, cell: usize) -> Result<Vec<u32>, PvsError> {
         let Some(rank) = self.rank(cell) else {
             return Err(PvsError::Invalid(format!(
                 "cell {cell} is not stored in this file"
             )));
         };
-        let mut set = RoaringBitmap::new();
+        let (mut set, mut payload, mut xor) = (Vec::new(), Vec::new(), Vec::new());
         let mut r = rank;
         for _ in 0..CHAIN_LIMIT {
-            set ^= self.payload(r)?;
+            self.payload(r, &mut payload)?;
+            bitmap::symmetric_difference(&set, &payload, &mut xor);
+            std::mem::swap(&mut set, &mut xor);
             match self.table.reference[r] {
                 0 => {
-                    if set.len() != self.table.count[rank] as u64
-                        || set.max().is_some_and(|m| m >= self.header.object_count)
+                    if set.len() != self.table.count[rank] as usize
+                        || set.last().is_some_and(|&m| m >= self.header.object_count)
                     {
                         return Err(PvsError::Corrupt(format!(
                             "cell {cell}: decoded set does not match"
@@ -312,7 +323,7 @@ impl PvsFile {
         )))
     }
 
-    fn payload(&self, rank: usize) -> Result<RoaringBitmap, PvsError> {
+    fn payload(&self, rank: usize, out: &mut Vec<u32>) -> Result<(), PvsError> {
         let block = self.block(self.table.block[rank])?;
         let (o, l) = (
             self.table.offset[rank] as usize,
@@ -321,9 +332,7 @@ impl PvsFile {
         let bytes = block
             .get(o..o + l)
             .ok_or_else(|| PvsError::Corrupt("payload outside its block".into()))?;
-        let bitmap = RoaringBitmap::deserialize_from(bytes)
-            .map_err(|e| PvsError::Corrupt(format!("bad bitmap: {e}")))?;
-        Ok(bitmap)
+        bitmap::decode_into(bytes, out).map_err(|e| PvsError::Corrupt(format!("bad bitmap: {e}")))
     }
 
     fn block(&self, b: u32) -> Result<Arc<Vec<u8>>, PvsError> {

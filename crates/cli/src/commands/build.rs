@@ -81,7 +81,24 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
             )
         }
         Command::Merge { inputs, out } => run_merge(&inputs, &out),
-        Command::Query { pvs, at, json } => run_query(&pvs, at, json),
+        Command::Query {
+            pvs,
+            at,
+            can_see,
+            seen_by,
+            secondary,
+            json,
+        } => match at {
+            Some(at) => run_query(&pvs, at, json),
+            None => {
+                let ask = crate::commands::gameplay::Questions {
+                    can_see,
+                    seen_by,
+                    secondary,
+                };
+                crate::commands::gameplay::run(&pvs, &ask, json)
+            }
+        },
         _ => unreachable!("dispatched by commands::run"),
     }
 }

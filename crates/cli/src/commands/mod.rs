@@ -9,6 +9,7 @@ mod cells;
 mod check;
 mod demo;
 mod frames;
+mod gameplay;
 mod generate;
 mod info;
 mod map;
