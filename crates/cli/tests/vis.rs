@@ -276,7 +276,7 @@ fn bad_levels_are_refused_and_left_untouched() {
     set_i32(&mut nodes, node_lump, 1 << 30); // node 0's plane
     refused(&nodes, None, &[], "missing plane");
     let mut bsp2 = dm1.clone();
-    bsp2[..4].copy_from_slice(b"BSP2");
+    bsp2[..4].copy_from_slice(b"BSP2"); // BSP29 records under a BSP2 header
     refused(&bsp2, None, &[], "not a multiple of 44");
     refused(&dm1, None, &["--threads", "0"], "--threads");
 
@@ -369,4 +369,125 @@ fn the_lump_writer_round_trips_any_rows() {
     // Writing the same rows again changes nothing.
     assert!(vislump::write_vis(&out, &rows).unwrap() == out);
     assert!(vislump::write_vis(&dm1, &rows[1..]).is_err());
+}
+
+/// dm1 converted to a 32-bit format (`BSP2`: float bounds; `2PSB`: short bounds): the
+/// nodes, faces, clipnodes, leaves, marksurfaces and edges widened, other lumps copied.
+fn widen(bsp29: &[u8], magic: &[u8; 4]) -> Vec<u8> {
+    let dir = Lumps::read(bsp29).unwrap();
+    let float = magic == b"BSP2";
+    let i16s = |r: &[u8], o: usize| i16::from_le_bytes([r[o], r[o + 1]]);
+    let u16s = |r: &[u8], o: usize| u16::from_le_bytes([r[o], r[o + 1]]);
+    let bounds = |out: &mut Vec<u8>, r: &[u8], o: usize| {
+        for k in 0..6 {
+            let v = i16s(r, o + 2 * k);
+            if float {
+                out.extend_from_slice(&(v as f32).to_le_bytes());
+            } else {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+    };
+    let mut out = vec![0u8; 4 + 8 * 15];
+    out[..4].copy_from_slice(magic);
+    for i in 0..15 {
+        let l = dir.lump(bsp29, i);
+        let mut w = Vec::new();
+        match i {
+            5 => {
+                for r in l.chunks(24) {
+                    w.extend_from_slice(&r[..4]);
+                    w.extend_from_slice(&(i16s(r, 4) as i32).to_le_bytes());
+                    w.extend_from_slice(&(i16s(r, 6) as i32).to_le_bytes());
+                    bounds(&mut w, r, 8);
+                    w.extend_from_slice(&(u16s(r, 20) as u32).to_le_bytes());
+                    w.extend_from_slice(&(u16s(r, 22) as u32).to_le_bytes());
+                }
+            }
+            7 => {
+                for r in l.chunks(20) {
+                    w.extend_from_slice(&(u16s(r, 0) as i32).to_le_bytes());
+                    w.extend_from_slice(&(i16s(r, 2) as i32).to_le_bytes());
+                    w.extend_from_slice(&r[4..8]);
+                    w.extend_from_slice(&(i16s(r, 8) as i32).to_le_bytes());
+                    w.extend_from_slice(&(i16s(r, 10) as i32).to_le_bytes());
+                    w.extend_from_slice(&r[12..20]);
+                }
+            }
+            9 => {
+                for r in l.chunks(8) {
+                    w.extend_from_slice(&r[..4]);
+                    w.extend_from_slice(&(i16s(r, 4) as i32).to_le_bytes());
+                    w.extend_from_slice(&(i16s(r, 6) as i32).to_le_bytes());
+                }
+            }
+            10 => {
+                for r in l.chunks(28) {
+                    w.extend_from_slice(&r[..8]);
+                    bounds(&mut w, r, 8);
+                    w.extend_from_slice(&(u16s(r, 20) as u32).to_le_bytes());
+                    w.extend_from_slice(&(u16s(r, 22) as u32).to_le_bytes());
+                    w.extend_from_slice(&r[24..28]);
+                }
+            }
+            11 | 12 => {
+                for r in l.chunks(2) {
+                    w.extend_from_slice(&(u16s(r, 0) as u32).to_le_bytes());
+                }
+            }
+            _ => w.extend_from_slice(l),
+        }
+        let at = out.len();
+        out[4 + 8 * i..8 + 8 * i].copy_from_slice(&(at as i32).to_le_bytes());
+        out[8 + 8 * i..12 + 8 * i].copy_from_slice(&(w.len() as i32).to_le_bytes());
+        out.extend_from_slice(&w);
+        out.resize(out.len().next_multiple_of(4), 0);
+    }
+    out
+}
+
+#[test]
+fn bsp2_and_2psb_levels_get_the_same_rows() {
+    let dir = tempfile::tempdir().unwrap();
+    let dm1 = std::fs::read(data("dm1.bsp")).unwrap();
+    let base = read_bsp(&dm1).unwrap();
+    let narrow = copy_level(dir.path(), "dm1.bsp");
+    let (code, _, err) = sightline(&["vis", &s(&narrow), "--fast", "--in-place", "--quiet"]);
+    assert_eq!(code, 0, "{err}");
+    let want = vislump::read_rows(&std::fs::read(&narrow).unwrap()).unwrap();
+    for magic in [b"BSP2", b"2PSB"] {
+        let wide = widen(&dm1, magic);
+        let level = read_bsp(&wide).unwrap();
+        assert_eq!(level.faces, base.faces);
+        assert_eq!(level.nodes, base.nodes);
+        assert_eq!(level.leaves, base.leaves);
+        let path = dir
+            .path()
+            .join(format!("{}.bsp", String::from_utf8_lossy(magic)));
+        std::fs::write(&path, &wide).unwrap();
+        let (code, _, err) = sightline(&["vis", &s(&path), "--fast", "--quiet"]);
+        assert_eq!(code, 0, "{err}");
+        let written = std::fs::read(&path).unwrap();
+        assert_eq!(vislump::read_rows(&written).unwrap(), want);
+        let (a, b) = (Lumps::read(&wide).unwrap(), Lumps::read(&written).unwrap());
+        for i in (0..15).filter(|&i| i != 4 && i != 10) {
+            assert!(a.lump(&wide, i) == b.lump(&written, i), "lump {i} changed");
+        }
+        if magic == b"BSP2" {
+            let bsp = qbsp::BspData::parse(qbsp::BspParseInput {
+                bsp: &written,
+                lit: None,
+                settings: qbsp::BspParseSettings::default(),
+            })
+            .unwrap();
+            for l in 1..=434 {
+                let row = want[l - 1].as_ref().unwrap();
+                let leaves: Vec<u32> = (0..434u32)
+                    .filter(|j| row[*j as usize >> 3] & (1 << (j & 7)) != 0)
+                    .map(|j| j + 1)
+                    .collect();
+                assert_eq!(qbsp_row(&bsp, l, 434), leaves, "BSP2 leaf {l}");
+            }
+        }
+    }
 }

@@ -14,8 +14,8 @@
 //!   offsets and lengths are rewritten. Every lump other than the visibility and leaf
 //!   lumps is copied byte for byte; the leaf lump differs only in the `visofs` fields.
 //!   A BSPX extension block (magic `BSPX` right after the last lump) is moved along and
-//!   its lump offsets shifted; any other trailing data is refused (it could hold
-//!   offsets we cannot fix).
+//!   its lump offsets shifted; trailing zero padding is dropped; any other trailing
+//!   data is refused (it could hold offsets we cannot fix).
 //!
 //! Guarantee: [`write_vis`] never panics; it returns a [`VisLumpError`] for a file whose
 //! header, lumps or leaves are malformed, for rows of the wrong number, or for a lump
@@ -282,9 +282,10 @@ pub fn write_vis(data: &[u8], rows: &[Vec<u8>]) -> Result<Vec<u8>, VisLumpError>
         leaves[at..at + 4].copy_from_slice(&o.to_le_bytes());
     }
 
-    // Lumps in their order in the input file; ties (empty lumps) by index.
+    // Lumps in their order in the input file; at one offset, empty lumps first, then
+    // by index (so that writing the output again keeps its order).
     let mut order: Vec<usize> = (0..LUMPS).collect();
-    order.sort_by_key(|&i| (dir.lumps[i].0, i));
+    order.sort_by_key(|&i| (dir.lumps[i].0, dir.lumps[i].1 > 0, i));
     let end = dir
         .lumps
         .iter()
@@ -298,8 +299,8 @@ pub fn write_vis(data: &[u8], rows: &[Vec<u8>]) -> Result<Vec<u8>, VisLumpError>
         return Err(fmt_err(
             "unknown data between the last lump and the end of the file",
         ));
-    } else if trailing.is_empty() {
-        None
+    } else if trailing.iter().all(|&b| b == 0) {
+        None // nothing, or padding
     } else if trailing.starts_with(b"BSPX") {
         Some(trailing)
     } else {

@@ -23,7 +23,7 @@ use anyhow::{bail, Context};
 use sightline_portals::bits::Bits;
 use sightline_portals::flow::{self, Seen};
 use sightline_portals::prt::parse_prt;
-use sightline_portals::vislump::{self, BspFormat, Lumps};
+use sightline_portals::vislump::{self, Lumps};
 use sightline_portals::{Mode, Portals};
 use sightline_scene::import::bsp::read_bsp;
 use std::io::Write;
@@ -32,7 +32,7 @@ use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
 pub struct VisArgs {
-    /// The level (`.bsp`: BSP29; BSP2 and 2PSB are recognized).
+    /// The level (`.bsp`: Quake's BSP29, or BSP2 / 2PSB).
     pub level: PathBuf,
     /// Start from qbsp's portal file (PRT1) instead of portalizing the level's tree.
     #[arg(long)]
@@ -73,13 +73,6 @@ fn vis(args: &VisArgs, threads: usize, quiet: bool) -> anyhow::Result<()> {
     let (visleafs, _) = dir
         .leaf_counts(&data)
         .with_context(|| format!("cannot use {}", path.display()))?;
-    if dir.format != BspFormat::Bsp29 {
-        bail!(
-            "{}: {} levels are not supported yet (the importer reads BSP29 only)",
-            path.display(),
-            dir.format.name()
-        );
-    }
     let level = read_bsp(&data).with_context(|| format!("cannot load {}", path.display()))?;
     let mode = if args.fast { Mode::Fast } else { Mode::Full };
     let (portals, prt_bytes) = match &args.prt {
@@ -157,9 +150,12 @@ fn vis(args: &VisArgs, threads: usize, quiet: bool) -> anyhow::Result<()> {
     } else {
         String::new()
     };
-    let source = if args.prt.is_some() { "prt" } else { "tree" };
+    let source = match &args.prt {
+        Some(p) => format!("from {}", p.display()),
+        None => "from the tree".to_string(),
+    };
     println!(
-        "vis {}: {} {} portals ({source}), {visleafs} visleafs, Σ|PVS| {sum}{ratio}; visibility lump {old_lump} → {new_lump} bytes; {threads} threads, {:.2} s{resumed}{}",
+        "vis {}: method {}, {} portals {source}, {visleafs} visleafs, Σ|PVS| {sum}{ratio}; visibility lump {old_lump} → {new_lump} bytes; {threads} threads, {:.2} s{resumed}{}",
         path.display(),
         if args.fast { "portals-fast" } else { "portals" },
         portals.portals().len(),
