@@ -133,12 +133,11 @@ fn vis(args: &VisArgs, threads: usize, quiet: bool) -> anyhow::Result<()> {
         if orig.exists() {
             kept = " (kept the existing .orig)";
         } else {
-            sightline_pvs::build::write_atomic(&orig, &data)
+            write_atomic(&orig, &data)
                 .with_context(|| format!("cannot keep the original as {}", orig.display()))?;
         }
     }
-    sightline_pvs::build::write_atomic(path, &out)
-        .with_context(|| format!("cannot write {}", path.display()))?;
+    write_atomic(path, &out).with_context(|| format!("cannot write {}", path.display()))?;
     let _ = std::fs::remove_file(&state_path);
 
     let ratio = match before {
@@ -167,6 +166,16 @@ fn vis(args: &VisArgs, threads: usize, quiet: bool) -> anyhow::Result<()> {
         },
     );
     Ok(())
+}
+
+/// Write `bytes` to `path` through a temporary file and a rename; on failure the
+/// temporary file is removed, so nothing half-written is left.
+fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), sightline_pvs::PvsError> {
+    sightline_pvs::build::write_atomic(path, bytes).inspect_err(|_| {
+        let mut tmp = path.as_os_str().to_owned();
+        tmp.push(".tmp");
+        let _ = std::fs::remove_file(PathBuf::from(tmp));
+    })
 }
 
 /// `LEVEL.bsp.orig`.
