@@ -491,3 +491,33 @@ fn bsp2_and_2psb_levels_get_the_same_rows() {
         }
     }
 }
+
+/// A BSPX block after the last lump moves with the lumps, its offsets shifted; unknown
+/// trailing data is refused.
+#[test]
+fn a_bspx_block_moves_with_the_lumps() {
+    let mut dm1 = std::fs::read(data("dm1.bsp")).unwrap();
+    dm1.resize(dm1.len().next_multiple_of(4), 0);
+    let at = dm1.len();
+    let payload = b"RGB lighting, say";
+    let mut bspx = b"BSPX".to_vec();
+    bspx.extend_from_slice(&1u32.to_le_bytes());
+    let mut name = [0u8; 24];
+    name[..11].copy_from_slice(b"RGBLIGHTING");
+    bspx.extend_from_slice(&name);
+    bspx.extend_from_slice(&((at + 40) as u32).to_le_bytes());
+    bspx.extend_from_slice(&(payload.len() as u32).to_le_bytes());
+    bspx.extend_from_slice(payload);
+    dm1.extend_from_slice(&bspx);
+    let rows = vec![vislump::row_of([1, 2, 3], 434); 434];
+    let out = vislump::write_vis(&dm1, &rows).unwrap();
+    let start = out.windows(4).rposition(|w| w == b"BSPX").unwrap();
+    let ofs = u32::from_le_bytes(out[start + 32..start + 36].try_into().unwrap()) as usize;
+    assert_eq!(ofs, start + 40);
+    assert_eq!(&out[ofs..ofs + payload.len()], payload);
+    assert_eq!(out.len() - start, bspx.len());
+    let mut junk = std::fs::read(data("dm1.bsp")).unwrap();
+    junk.extend_from_slice(b"????????");
+    let e = vislump::write_vis(&junk, &rows).unwrap_err().to_string();
+    assert!(e.contains("unknown data"), "{e}");
+}
