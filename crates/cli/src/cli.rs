@@ -435,6 +435,9 @@ pub enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Compute a Quake level's leaf PVS and write it into the level's visibility lump
+    /// (as Quake's `vis` does), keeping the original as LEVEL.bsp.orig.
+    Vis(crate::commands::vis::VisArgs),
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]

@@ -123,12 +123,53 @@ pub fn flow_all(g: &Graph, mightsee: &[Seen]) -> Vec<Seen> {
 /// that would take more answers the portal's flood instead, a superset of its flow,
 /// so the result stays conservative and the solve time bounded.
 pub fn flow_all_within(g: &Graph, mightsee: &[Seen], budget: Option<usize>) -> Vec<Seen> {
+    let none = vec![None; g.portals.len()];
+    let ok: Result<_, std::convert::Infallible> =
+        flow_all_resumable(g, mightsee, budget, none, |_, _| Ok(()));
+    match ok {
+        Ok(v) => v,
+        Err(never) => match never {},
+    }
+}
+
+/// The waves of [`flow_all`]: directed portals by increasing flood size (ties by index),
+/// in chunks; each wave's flows see the results of the waves before it only, so the
+/// answer does not depend on how many threads run a wave.
+pub fn flow_waves(g: &Graph, mightsee: &[Seen]) -> Vec<Vec<usize>> {
     let n = g.portals.len();
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by_key(|&p| (mightsee[p].cells.count(), p));
-    let mut done: Vec<Option<Seen>> = vec![None; n];
     let wave = 64.max(n / 256);
-    for chunk in order.chunks(wave) {
+    order.chunks(wave).map(|c| c.to_vec()).collect()
+}
+
+/// [`flow_all_within`], resumable: `done` holds the results of earlier runs (by
+/// directed portal). The leading waves (see [`flow_waves`]) whose portals are all in
+/// `done` are taken as they are; from the first incomplete wave on, everything is
+/// recomputed (a partial wave is ignored), so a resumed run gives exactly the result
+/// of an uninterrupted one. `on_wave(wave_index, results)` is called after each wave
+/// computed here, with the wave's `(portal, result)` pairs; an error from it stops the
+/// run and is returned.
+pub fn flow_all_resumable<E>(
+    g: &Graph,
+    mightsee: &[Seen],
+    budget: Option<usize>,
+    mut done: Vec<Option<Seen>>,
+    mut on_wave: impl FnMut(usize, &[(usize, &Seen)]) -> Result<(), E>,
+) -> Result<Vec<Seen>, E> {
+    let n = g.portals.len();
+    done.resize(n, None);
+    let waves = flow_waves(g, mightsee);
+    let resumed = waves
+        .iter()
+        .take_while(|w| w.iter().all(|&p| done[p].is_some()))
+        .count();
+    for w in &waves[resumed..] {
+        for &p in w {
+            done[p] = None;
+        }
+    }
+    for (k, chunk) in waves.iter().enumerate().skip(resumed) {
         let results: Vec<Seen> = chunk
             .par_iter()
             .map(|&p| {
@@ -138,11 +179,17 @@ pub fn flow_all_within(g: &Graph, mightsee: &[Seen], budget: Option<usize>) -> V
         for (&p, r) in chunk.iter().zip(results) {
             done[p] = Some(r);
         }
+        let pairs: Vec<(usize, &Seen)> = chunk
+            .iter()
+            .filter_map(|&p| done[p].as_ref().map(|s| (p, s)))
+            .collect();
+        on_wave(k, &pairs)?;
     }
-    done.into_iter()
+    Ok(done
+        .into_iter()
         .enumerate()
         .map(|(p, d)| d.unwrap_or_else(|| mightsee[p].clone()))
-        .collect()
+        .collect())
 }
 
 /// The cells of a cell's PVS from what its outgoing portals see: itself and every cell

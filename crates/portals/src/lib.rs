@@ -13,7 +13,9 @@
 //! * [`portalize`] — portals from the tree, as qbsp builds them;
 //! * [`flow`] — the base flood (`portals-fast`) and the flow through portal sequences
 //!   with separating planes (`portals`), and the face test;
-//! * [`oracle`] — rays through the tree, independent of the above, for the tests.
+//! * [`oracle`] — rays through the tree, independent of the above, for the tests;
+//! * [`prt`] — qbsp's portal files (`PRT1`), an alternative to [`portalize`];
+//! * [`vislump`] — the level's visibility lump written as Quake engines read it.
 //!
 //! ```
 //! use sightline_portals::{Mode, Portals};
@@ -31,8 +33,10 @@ pub mod flow;
 pub mod method;
 pub mod oracle;
 pub mod portalize;
+pub mod prt;
 pub mod reference;
 pub mod testlevel;
+pub mod vislump;
 pub mod winding;
 
 pub use cells::leaf_cells;
@@ -68,6 +72,8 @@ pub struct LeafPvs {
 pub enum PortalError {
     #[error("the level has no open leaves")]
     Empty,
+    #[error(transparent)]
+    Prt(#[from] prt::PrtError),
 }
 
 /// The portals of a level, ready to answer leaf PVS queries.
@@ -89,7 +95,20 @@ impl Portals {
         if !(1..=level.visleafs).any(|l| level.is_view_leaf(l)) {
             return Err(PortalError::Empty);
         }
-        let portals = portalize::portalize(level);
+        Self::with_portals(level, portalize::portalize(level))
+    }
+
+    /// The portals of qbsp's portal file instead of the tree's: checked against the
+    /// level (see [`prt::portals_for_level`]), then flooded.
+    pub fn from_prt(level: &BspLevel, file: &prt::Prt) -> Result<Portals, PortalError> {
+        if !(1..=level.visleafs).any(|l| level.is_view_leaf(l)) {
+            return Err(PortalError::Empty);
+        }
+        let portals = prt::portals_for_level(file, level)?;
+        Self::with_portals(level, portals)
+    }
+
+    fn with_portals(level: &BspLevel, portals: Vec<Portal>) -> Result<Portals, PortalError> {
         let graph = Graph::from_portals(
             level.leaves.len(),
             portals.iter().map(|p| (&p.winding, p.plane, p.leaves)),
@@ -184,6 +203,17 @@ impl Portals {
                 .flows
                 .get_or_init(|| flow::flow_all(&self.graph, &self.mightsee)),
         }
+    }
+
+    /// The leaves each leaf `1 ..= visleafs` sees (itself included), from what each
+    /// directed portal sees (`portal_sets`, or a flow computed with
+    /// [`flow::flow_all_resumable`]): `out[l - 1]` for leaf `l`. These are exactly the
+    /// `leaves` of [`Portals::solve_all`], without the face test.
+    pub fn visleaf_sets(&self, seen: &[Seen]) -> Vec<Bits> {
+        (1..=self.level.visleafs)
+            .into_par_iter()
+            .map(|l| flow::cell_pvs(&self.graph, seen, l))
+            .collect()
     }
 
     fn leaf_pvs(&self, leaf: u32, vis: &[Seen], mode: Mode) -> LeafPvs {

@@ -18,6 +18,7 @@ mod pvs;
 mod serve;
 mod tiles;
 mod truth;
+pub mod vis;
 
 use crate::cli::{Cli, Command};
 
@@ -40,5 +41,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         c @ Command::Serve { .. } => serve::run(c, quiet),
         c @ Command::Tiles { .. } => tiles::run(c, quiet),
         c @ Command::Frames { .. } => frames::run(c, quiet),
+        Command::Vis(args) => vis::run(args, quiet),
     }
 }

@@ -1,6 +1,8 @@
 //! Quake BSP (version 29) importer: the compiled level's tree (planes, nodes, leaves),
 //! its world faces as polygons, and its visibility lump — the *reference* leaf PVS that
-//! id's `vis` computed (SPEC §11).
+//! id's `vis` computed (SPEC §11). The 32-bit variants of large modern maps are read
+//! too: `BSP2` (float node and leaf bounds) and `2PSB` (short bounds), whose nodes,
+//! leaves, faces, edges and marksurfaces hold 32-bit indices (same lumps, same order).
 //!
 //! Layout (little-endian): `i32 version = 29`, then 15 lumps `(offset, length)`:
 //! entities, planes, textures, vertexes, visibility, nodes, texinfo, faces, lighting,
@@ -36,6 +38,50 @@ pub const CONTENTS_SKY: i32 = -6;
 
 const VERSION: i32 = 29;
 const LUMPS: usize = 15;
+
+/// The record layout of a file: Quake's version 29, or a 32-bit variant.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Format {
+    Bsp29,
+    /// `BSP2`: float bounds in nodes and leaves.
+    Bsp2,
+    /// `2PSB`: short bounds, 32-bit indices.
+    Bsp2Rmq,
+}
+
+impl Format {
+    fn wide(self) -> bool {
+        self != Format::Bsp29
+    }
+    fn node_size(self) -> usize {
+        match self {
+            Format::Bsp29 => 24,
+            Format::Bsp2 => 44,
+            Format::Bsp2Rmq => 32,
+        }
+    }
+    fn leaf_size(self) -> usize {
+        match self {
+            Format::Bsp29 => 28,
+            Format::Bsp2 => 44,
+            Format::Bsp2Rmq => 32,
+        }
+    }
+    fn face_size(self) -> usize {
+        if self.wide() {
+            28
+        } else {
+            20
+        }
+    }
+    fn index_size(self) -> usize {
+        if self.wide() {
+            4
+        } else {
+            2
+        }
+    }
+}
 const MAX_DEPTH: usize = 4096;
 const MAX_COORD: f64 = 1e6;
 
@@ -143,6 +189,7 @@ pub struct BspLevel {
 
 struct Reader<'a> {
     data: &'a [u8],
+    format: Format,
     lumps: [(usize, usize); LUMPS],
 }
 
@@ -177,6 +224,9 @@ fn i16_at(d: &[u8], o: usize) -> Option<i16> {
 fn u16_at(d: &[u8], o: usize) -> Option<u16> {
     Some(u16::from_le_bytes(d.get(o..o + 2)?.try_into().ok()?))
 }
+fn u32_at(d: &[u8], o: usize) -> Option<u32> {
+    Some(u32::from_le_bytes(d.get(o..o + 4)?.try_into().ok()?))
+}
 fn f32_at(d: &[u8], o: usize) -> Option<f64> {
     Some(f32::from_le_bytes(d.get(o..o + 4)?.try_into().ok()?) as f64)
 }
@@ -184,11 +234,16 @@ fn f32_at(d: &[u8], o: usize) -> Option<f64> {
 impl<'a> Reader<'a> {
     fn new(data: &'a [u8]) -> Result<Self, ImportError> {
         let version = i32_at(data, 0).ok_or_else(|| err("file too short for a header"))?;
-        if version != VERSION {
-            return Err(err(format!(
-                "version {version}, only version 29 (Quake) is supported"
-            )));
-        }
+        let format = match &data[..4] {
+            b"BSP2" => Format::Bsp2,
+            b"2PSB" => Format::Bsp2Rmq,
+            _ if version == VERSION => Format::Bsp29,
+            _ => {
+                return Err(err(format!(
+                    "version {version}, only Quake's version 29, BSP2 and 2PSB are supported"
+                )))
+            }
+        };
         let mut lumps = [(0, 0); LUMPS];
         for (i, l) in lumps.iter_mut().enumerate() {
             let (o, n) = (
@@ -204,7 +259,11 @@ impl<'a> Reader<'a> {
             }
             *l = (o as usize, n as usize);
         }
-        Ok(Reader { data, lumps })
+        Ok(Reader {
+            data,
+            format,
+            lumps,
+        })
     }
 
     fn lump(&self, i: usize) -> &'a [u8] {
@@ -273,7 +332,8 @@ pub fn read_bsp(data: &[u8]) -> Result<BspLevel, ImportError> {
     let (firstface, numfaces) = (m(5)?, m(6)?);
 
     // Leaves.
-    let (leaf_lump, numleaves) = r.records(10, 28)?;
+    let fmt = r.format;
+    let (leaf_lump, numleaves) = r.records(10, fmt.leaf_size())?;
     if numleaves == 0 {
         return Err(err("no leaves"));
     }
@@ -284,17 +344,23 @@ pub fn read_bsp(data: &[u8]) -> Result<BspLevel, ImportError> {
     }
 
     // Nodes: plane i32, children i16×2, mins/maxs i16×6, firstface u16, numfaces u16.
-    let (l, n) = r.records(5, 24)?;
+    // (BSP2 / 2PSB: children i32×2, then wider bounds and face range.)
+    let (l, n) = r.records(5, fmt.node_size())?;
     let mut nodes = Vec::with_capacity(n);
     for i in 0..n {
-        let o = 24 * i;
+        let o = fmt.node_size() * i;
         let plane = i32_at(l, o).ok_or_else(|| short("node"))?;
         if plane < 0 || plane as usize >= planes.len() {
             return Err(err(format!("node {i} refers to missing plane {plane}")));
         }
         let mut children = [Child::Leaf(0); 2];
         for (k, c) in children.iter_mut().enumerate() {
-            let raw = i16_at(l, o + 4 + 2 * k).ok_or_else(|| short("node"))? as i32;
+            let raw = if fmt.wide() {
+                i32_at(l, o + 4 + 4 * k)
+            } else {
+                i16_at(l, o + 4 + 2 * k).map(i32::from)
+            }
+            .ok_or_else(|| short("node"))?;
             *c = Child::from_raw(raw);
             match *c {
                 Child::Node(j) if j as usize >= n => {
@@ -321,7 +387,7 @@ pub fn read_bsp(data: &[u8]) -> Result<BspLevel, ImportError> {
     check_tree(&nodes, headnode)?;
 
     // Edges, surfedges.
-    let (edge_lump, numedges) = r.records(12, 4)?;
+    let (edge_lump, numedges) = r.records(12, 2 * fmt.index_size())?;
     let (se_lump, numse) = r.records(13, 4)?;
 
     // Texture names through texinfo → miptex.
@@ -329,7 +395,7 @@ pub fn read_bsp(data: &[u8]) -> Result<BspLevel, ImportError> {
     let (texinfo_lump, numtexinfo) = r.records(6, 40)?;
 
     // Faces of model 0.
-    let (face_lump, numfaces_all) = r.records(7, 20)?;
+    let (face_lump, numfaces_all) = r.records(7, fmt.face_size())?;
     if firstface < 0
         || numfaces < 0
         || (firstface as usize).saturating_add(numfaces as usize) > numfaces_all
@@ -341,12 +407,19 @@ pub fn read_bsp(data: &[u8]) -> Result<BspLevel, ImportError> {
     let (firstface, numfaces) = (firstface as usize, numfaces as usize);
     let mut faces = Vec::with_capacity(numfaces);
     for fi in firstface..firstface + numfaces {
-        let o = 20 * fi;
-        let plane = u16_at(face_lump, o).ok_or_else(|| short("face"))? as usize;
-        let side = i16_at(face_lump, o + 2).ok_or_else(|| short("face"))?;
-        let first = i32_at(face_lump, o + 4).ok_or_else(|| short("face"))?;
-        let count = i16_at(face_lump, o + 8).ok_or_else(|| short("face"))?;
-        let texinfo = i16_at(face_lump, o + 10).ok_or_else(|| short("face"))?;
+        let o = fmt.face_size() * fi;
+        // BSP29: plane u16, side i16, firstedge i32, numedges i16, texinfo i16;
+        // BSP2 / 2PSB: five i32.
+        let (plane, side, first, count, texinfo) = if fmt.wide() {
+            let f = |k: usize| i32_at(face_lump, o + 4 * k).ok_or_else(|| short("face"));
+            (f(0)?, f(1)?, f(2)?, f(3)?, f(4)?)
+        } else {
+            let h = |k: usize| i16_at(face_lump, o + k).ok_or_else(|| short("face"));
+            let plane = u16_at(face_lump, o).ok_or_else(|| short("face"))? as i32;
+            let first = i32_at(face_lump, o + 4).ok_or_else(|| short("face"))?;
+            (plane, h(2)? as i32, first, h(8)? as i32, h(10)? as i32)
+        };
+        let plane = usize::try_from(plane).unwrap_or(usize::MAX);
         if plane >= planes.len() {
             return Err(err(format!("face {fi} refers to missing plane {plane}")));
         }
@@ -356,7 +429,7 @@ pub fn read_bsp(data: &[u8]) -> Result<BspLevel, ImportError> {
             )));
         }
         let mut polygon = Vec::with_capacity(count as usize);
-        for k in first as usize..(first + count as i32) as usize {
+        for k in first as usize..first as usize + count as usize {
             let se = i32_at(se_lump, 4 * k).ok_or_else(|| short("surfedge"))?;
             let (edge, end) = if se >= 0 {
                 (se as usize, 0)
@@ -366,7 +439,12 @@ pub fn read_bsp(data: &[u8]) -> Result<BspLevel, ImportError> {
             if edge >= numedges {
                 return Err(err(format!("surfedge {k} refers to missing edge {edge}")));
             }
-            let v = u16_at(edge_lump, 4 * edge + 2 * end).ok_or_else(|| short("edge"))? as usize;
+            let v = if fmt.wide() {
+                u32_at(edge_lump, 8 * edge + 4 * end).map(|v| v as usize)
+            } else {
+                u16_at(edge_lump, 4 * edge + 2 * end).map(usize::from)
+            }
+            .ok_or_else(|| short("edge"))?;
             let p = vertexes
                 .get(v)
                 .ok_or_else(|| err(format!("edge {edge} refers to missing vertex {v}")))?;
@@ -390,21 +468,43 @@ pub fn read_bsp(data: &[u8]) -> Result<BspLevel, ImportError> {
     }
 
     // Marksurfaces, then the leaves that use them.
-    let (ms_lump, numms) = r.records(11, 2)?;
+    let (ms_lump, numms) = r.records(11, fmt.index_size())?;
     let mut leaves = Vec::with_capacity(numleaves);
     let mut bounds = Aabb3::EMPTY;
     for i in 0..numleaves {
-        let o = 28 * i;
+        let o = fmt.leaf_size() * i;
         let contents = i32_at(leaf_lump, o).ok_or_else(|| short("leaf"))?;
         let visofs = i32_at(leaf_lump, o + 4).ok_or_else(|| short("leaf"))?;
+        // Bounds: i16×6 (BSP29, 2PSB) or f32×6 (BSP2); then the marksurface range, u16×2
+        // (BSP29) or u32×2.
         let c = |k: usize| -> Result<f64, ImportError> {
-            Ok(i16_at(leaf_lump, o + 8 + 2 * k).ok_or_else(|| short("leaf"))? as f64)
+            match fmt {
+                Format::Bsp2 => f32_at(leaf_lump, o + 8 + 4 * k).filter(|v| v.is_finite()),
+                _ => i16_at(leaf_lump, o + 8 + 2 * k).map(f64::from),
+            }
+            .ok_or_else(|| short("leaf"))
         };
         let mins = [c(0)?, c(1)?, c(2)?];
         let maxs = [c(3)?, c(4)?, c(5)?];
-        let first = u16_at(leaf_lump, o + 20).ok_or_else(|| short("leaf"))? as usize;
-        let count = u16_at(leaf_lump, o + 22).ok_or_else(|| short("leaf"))? as usize;
-        if first + count > numms {
+        let (first, count) = match fmt {
+            Format::Bsp29 => (
+                u16_at(leaf_lump, o + 20).map(usize::from),
+                u16_at(leaf_lump, o + 22).map(usize::from),
+            ),
+            Format::Bsp2Rmq => (
+                u32_at(leaf_lump, o + 20).map(|v| v as usize),
+                u32_at(leaf_lump, o + 24).map(|v| v as usize),
+            ),
+            Format::Bsp2 => (
+                u32_at(leaf_lump, o + 32).map(|v| v as usize),
+                u32_at(leaf_lump, o + 36).map(|v| v as usize),
+            ),
+        };
+        let (first, count) = (
+            first.ok_or_else(|| short("leaf"))?,
+            count.ok_or_else(|| short("leaf"))?,
+        );
+        if first.saturating_add(count) > numms {
             return Err(err(format!(
                 "leaf {i}'s marksurfaces {first}+{count} exceed the {numms} in the file"
             )));
@@ -414,7 +514,12 @@ pub fn read_bsp(data: &[u8]) -> Result<BspLevel, ImportError> {
         }
         let mut leaf_faces = Vec::with_capacity(count);
         for k in first..first + count {
-            let f = u16_at(ms_lump, 2 * k).ok_or_else(|| short("marksurface"))? as usize;
+            let f = if fmt.wide() {
+                u32_at(ms_lump, 4 * k).map(|v| v as usize)
+            } else {
+                u16_at(ms_lump, 2 * k).map(usize::from)
+            }
+            .ok_or_else(|| short("marksurface"))?;
             // Faces of other models (doors, lifts) are not world objects.
             if (firstface..firstface + numfaces).contains(&f) {
                 let id = (f - firstface) as u32;
