@@ -295,6 +295,10 @@ pub enum Command {
         /// cells (scene units; default automatic, see docs/methods/auto-cells.md).
         #[arg(long)]
         smallest_hole: Option<f64>,
+        /// Mesh levels with `volumetric` (the default there): the viewer's eye above the
+        /// floor (scene units; default 1.7, or 3.5 voxels when the voxels are coarser).
+        #[arg(long)]
+        eye_height: Option<f64>,
         #[arg(long)]
         json: bool,
     },

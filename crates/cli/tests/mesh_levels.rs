@@ -153,6 +153,22 @@ fn build_defaults_to_walkable_viewcells_on_a_mesh_level() {
     let (code, out, _) = sightline(&["query", &pvs_s, "--at=-4.5,-2,2.9"]);
     assert_eq!(code, 0);
     assert!(out.contains("free space"), "{out}");
+    // check judges walkable viewcells by default on a mesh level.
+    let (code, out, err) = sightline(&[
+        "check",
+        &obj,
+        "--smallest-hole",
+        "0.5",
+        "--cells",
+        "3",
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let c: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(c["method"], "volumetric");
+    assert_eq!(c["missed"], 0);
+    assert!(c["judged"].as_u64().unwrap() >= 1, "{c}");
+    assert!(c["culled_median"].as_f64().unwrap() > 0.0, "{c}");
     // A bad eye height is one error line.
     let (code, _, err) = sightline(&["build", &obj, "--eye-height", "-1", "-o", &pvs_s]);
     assert_ne!(code, 0);

@@ -58,11 +58,31 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         set,
         reference,
         smallest_hole,
+        eye_height,
         json,
     } = cmd
     else {
         bail!("internal: `check` called with another command");
     };
+    let mesh = crate::commands::mesh::is_mesh(&scene.scene);
+    let volumetric = sightline_core::Method::Volumetric.name();
+    if mesh && pvs.is_none() && method.as_deref().is_none_or(|m| m == volumetric) {
+        let k = count_arg(
+            cells.as_deref(),
+            "on a mesh level, --cells is a number of walkable viewcells to judge",
+        )?;
+        return crate::commands::mesh::check_volumetric(
+            &scene,
+            smallest_hole,
+            eye_height,
+            k,
+            json,
+            quiet,
+        );
+    }
+    if eye_height.is_some() {
+        bail!("--eye-height sets the walkable viewcells of a mesh level (.obj, .gltf, .glb) with --method volumetric");
+    }
     if let Some(full) = method
         .as_deref()
         .and_then(|m| crate::commands::mesh::portal_mode(&scene.scene, m))

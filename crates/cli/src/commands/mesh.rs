@@ -148,6 +148,107 @@ pub fn build_volumetric(
     Ok(())
 }
 
+/// `check LEVEL.obj [--method volumetric] [--cells K]`: K walkable viewcells spread
+/// over the level, each one's volumetric PVS judged by the item-buffer truth sampled in
+/// its free voxels; an error when a cluster the truth sees is missing.
+pub fn check_volumetric(
+    scene: &SceneArg,
+    smallest_hole: Option<f64>,
+    eye_height: Option<f64>,
+    k: usize,
+    json: bool,
+    quiet: bool,
+) -> anyhow::Result<()> {
+    use rayon::prelude::*;
+    let t = Instant::now();
+    let (clustered, auto) = prepare(scene, smallest_hole, false, quiet)?;
+    let eye = eye_height.unwrap_or_else(|| default_eye_height(auto.report.smallest_hole));
+    anyhow::ensure!(
+        eye.is_finite() && eye > 0.0,
+        "--eye-height must be a positive number of scene units, got {eye}"
+    );
+    let viewcells = auto.viewcells(&sightline_autocells::viewcells::Walker {
+        eye_height: eye,
+        width: VIEWCELL_WIDTH,
+    });
+    anyhow::ensure!(
+        !viewcells.is_empty(),
+        "no walkable floor in {} (no upward surface with room for the eye at {eye})",
+        scene.scene.display()
+    );
+    let step = (viewcells.len() / k.max(1)).max(1);
+    let picked: Vec<_> = viewcells.iter().copied().step_by(step).take(k).collect();
+    let vol = auto.volumetric();
+    let pvs: Vec<Vec<u32>> = picked
+        .par_iter()
+        .map(|b| auto.viewcell_pvs(&vol, b))
+        .collect();
+    let seconds_pvs = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let spinner = crate::common::progress(1, quiet, "ground truth in the judged viewcells");
+    let judged = auto.judge_boxes(
+        &clustered.scene,
+        &picked,
+        |c| pvs[c].clone(),
+        picked.len(),
+        &TruthOptions::default(),
+    );
+    spinner.finish_and_clear();
+    let missed: usize = judged.iter().map(|j| j.missed.len()).sum();
+    let mut over: Vec<f64> = judged
+        .iter()
+        .map(|j| j.pvs as f64 / j.truth.max(1) as f64)
+        .collect();
+    over.sort_by(f64::total_cmp);
+    let mut culled: Vec<f64> = pvs
+        .iter()
+        .map(|p| 1.0 - p.len() as f64 / auto.objects.max(1) as f64)
+        .collect();
+    culled.sort_by(f64::total_cmp);
+    let median = |v: &[f64]| v.get(v.len() / 2).copied().unwrap_or(0.0);
+    let name = Method::Volumetric.name();
+    let report = serde_json::json!({
+        "method": name,
+        "viewcells": viewcells.len(),
+        "eye_height": eye,
+        "clusters": auto.objects,
+        "judged": judged.len(),
+        "missed": missed,
+        "over_median": median(&over),
+        "culled_median": median(&culled),
+        "seconds_pvs": seconds_pvs,
+        "seconds_truth": t.elapsed().as_secs_f64(),
+        "judged_cells": judged,
+    });
+    if json {
+        print_json(&report)?;
+    } else {
+        println!(
+            "{name}: {} walkable viewcells, {} judged, missed {missed}, PVS / truth median {:.2}, median viewcell culls {:.1} % of {} clusters (PVS {:.1} s, truth {:.1} s)",
+            viewcells.len(),
+            judged.len(),
+            median(&over),
+            100.0 * median(&culled),
+            auto.objects,
+            seconds_pvs,
+            t.elapsed().as_secs_f64()
+        );
+        for j in &judged {
+            for w in &j.missed {
+                println!(
+                    "missed: cluster {} of viewcell {} seen from {:?} along {:?}",
+                    w.id, j.cell, w.viewpoint, w.direction
+                );
+            }
+        }
+    }
+    anyhow::ensure!(
+        missed == 0,
+        "method {name} missed {missed} visible cluster(s) — a conservativeness bug (witnesses above)"
+    );
+    Ok(())
+}
+
 /// Whether `index` of a `.pvs` is a free-space cell (not a walkable viewcell): `Some`
 /// only for files with walkable viewcells (`volumetric`).
 pub fn free_space(params: &[(String, String)], index: usize) -> Option<bool> {
