@@ -8,6 +8,7 @@ use crate::cli::SceneArg;
 use crate::common::{load_scene, print_json};
 use anyhow::Context;
 use serde::Serialize;
+use sightline_autocells::judge::JudgedCell;
 use sightline_autocells::{default_cluster_size, AutoCells, Options, MAX_CLUSTER_TRIANGLES};
 use sightline_core::check::TruthOptions;
 use sightline_core::Method;
@@ -194,18 +195,7 @@ pub fn check_volumetric(
         &TruthOptions::default(),
     );
     spinner.finish_and_clear();
-    let missed: usize = judged.iter().map(|j| j.missed.len()).sum();
-    let mut over: Vec<f64> = judged
-        .iter()
-        .map(|j| j.pvs as f64 / j.truth.max(1) as f64)
-        .collect();
-    over.sort_by(f64::total_cmp);
-    let mut culled: Vec<f64> = pvs
-        .iter()
-        .map(|p| 1.0 - p.len() as f64 / auto.objects.max(1) as f64)
-        .collect();
-    culled.sort_by(f64::total_cmp);
-    let median = |v: &[f64]| v.get(v.len() / 2).copied().unwrap_or(0.0);
+    let sum = Summary::of(&judged, pvs.iter().map(Vec::len), auto.objects);
     let name = Method::Volumetric.name();
     let report = serde_json::json!({
         "method": name,
@@ -213,9 +203,9 @@ pub fn check_volumetric(
         "eye_height": eye,
         "clusters": auto.objects,
         "judged": judged.len(),
-        "missed": missed,
-        "over_median": median(&over),
-        "culled_median": median(&culled),
+        "missed": sum.missed,
+        "over_median": sum.over_median,
+        "culled_median": sum.culled_median,
         "seconds_pvs": seconds_pvs,
         "seconds_truth": t.elapsed().as_secs_f64(),
         "judged_cells": judged,
@@ -224,29 +214,18 @@ pub fn check_volumetric(
         print_json(&report)?;
     } else {
         println!(
-            "{name}: {} walkable viewcells, {} judged, missed {missed}, PVS / truth median {:.2}, median viewcell culls {:.1} % of {} clusters (PVS {:.1} s, truth {:.1} s)",
+            "{name}: {} walkable viewcells, {} judged, missed {}, PVS / truth median {:.2}, median viewcell culls {:.1} % of {} clusters (PVS {:.1} s, truth {:.1} s)",
             viewcells.len(),
             judged.len(),
-            median(&over),
-            100.0 * median(&culled),
+            sum.missed,
+            sum.over_median,
+            100.0 * sum.culled_median,
             auto.objects,
             seconds_pvs,
             t.elapsed().as_secs_f64()
         );
-        for j in &judged {
-            for w in &j.missed {
-                println!(
-                    "missed: cluster {} of viewcell {} seen from {:?} along {:?}",
-                    w.id, j.cell, w.viewpoint, w.direction
-                );
-            }
-        }
     }
-    anyhow::ensure!(
-        missed == 0,
-        "method {name} missed {missed} visible cluster(s) — a conservativeness bug (witnesses above)"
-    );
-    Ok(())
+    sum.witnesses(name, "viewcell", &judged, json)
 }
 
 /// Whether `index` of a `.pvs` is a free-space cell (not a walkable viewcell): `Some`
@@ -428,25 +407,19 @@ pub fn check(
     let spinner = crate::common::progress(1, quiet, "ground truth in the judged cells");
     let judged = auto.judge(&clustered.scene, k, &TruthOptions::default());
     spinner.finish_and_clear();
-    let missed: usize = judged.iter().map(|j| j.missed.len()).sum();
-    let mut over: Vec<f64> = judged
-        .iter()
-        .map(|j| j.pvs as f64 / j.truth.max(1) as f64)
-        .collect();
-    over.sort_by(f64::total_cmp);
-    let mut culled: Vec<f64> = (0..auto.len())
-        .map(|c| 1.0 - auto.pvs(c).len() as f64 / auto.objects.max(1) as f64)
-        .collect();
-    culled.sort_by(f64::total_cmp);
-    let median = |v: &[f64]| v.get(v.len() / 2).copied().unwrap_or(0.0);
+    let sum = Summary::of(
+        &judged,
+        (0..auto.len()).map(|c| auto.pvs(c).len()),
+        auto.objects,
+    );
     let report = serde_json::json!({
         "method": method_name(full),
         "cells": auto.len(),
         "clusters": auto.objects,
         "judged": judged.len(),
-        "missed": missed,
-        "over_median": median(&over),
-        "culled_median": median(&culled),
+        "missed": sum.missed,
+        "over_median": sum.over_median,
+        "culled_median": sum.culled_median,
         "seconds_pvs": seconds_pvs,
         "seconds_truth": t.elapsed().as_secs_f64(),
         "leak": auto.report.leak.as_ref().map(|l| serde_json::json!({"inside": l.inside, "void": l.border})),
@@ -456,31 +429,76 @@ pub fn check(
         print_json(&report)?;
     } else {
         println!(
-            "{}: {} cells, {} judged, missed {missed}, PVS / truth median {:.2}, median cell culls {:.1} % of {} clusters (PVS of every cell {:.1} s, truth {:.1} s)",
+            "{}: {} cells, {} judged, missed {}, PVS / truth median {:.2}, median cell culls {:.1} % of {} clusters (PVS of every cell {:.1} s, truth {:.1} s)",
             method_name(full),
             auto.len(),
             judged.len(),
-            median(&over),
-            100.0 * median(&culled),
+            sum.missed,
+            sum.over_median,
+            100.0 * sum.culled_median,
             auto.objects,
             seconds_pvs,
             t.elapsed().as_secs_f64()
         );
-        for j in &judged {
-            for w in &j.missed {
-                println!(
-                    "missed: cluster {} of cell {} seen from {:?} along {:?}",
-                    w.id, j.cell, w.viewpoint, w.direction
-                );
-            }
+    }
+    sum.witnesses(method_name(full), "cell", &judged, json)
+}
+
+/// What `check` reports of judged cells: clusters missed, median PVS / truth, and
+/// the median share of clusters a cell culls (over `sizes`, every cell's PVS size).
+struct Summary {
+    missed: usize,
+    over_median: f64,
+    culled_median: f64,
+}
+
+impl Summary {
+    fn of(judged: &[JudgedCell], sizes: impl Iterator<Item = usize>, objects: usize) -> Summary {
+        let median = |mut v: Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            v.get(v.len() / 2).copied().unwrap_or(0.0)
+        };
+        Summary {
+            missed: judged.iter().map(|j| j.missed.len()).sum(),
+            over_median: median(
+                judged
+                    .iter()
+                    .map(|j| j.pvs as f64 / j.truth.max(1) as f64)
+                    .collect(),
+            ),
+            culled_median: median(
+                sizes
+                    .map(|n| 1.0 - n as f64 / objects.max(1) as f64)
+                    .collect(),
+            ),
         }
     }
-    anyhow::ensure!(
-        missed == 0,
-        "method {} missed {missed} visible cluster(s) — a conservativeness bug (witnesses above)",
-        method_name(full)
-    );
-    Ok(())
+
+    /// Print each miss's witness (text mode) and fail when there is one.
+    fn witnesses(
+        &self,
+        method: &str,
+        cell: &str,
+        judged: &[JudgedCell],
+        json: bool,
+    ) -> anyhow::Result<()> {
+        if !json {
+            for j in judged {
+                for w in &j.missed {
+                    println!(
+                        "missed: cluster {} of {cell} {} seen from {:?} along {:?}",
+                        w.id, j.cell, w.viewpoint, w.direction
+                    );
+                }
+            }
+        }
+        anyhow::ensure!(
+            self.missed == 0,
+            "method {method} missed {} visible cluster(s) — a conservativeness bug (witnesses above)",
+            self.missed
+        );
+        Ok(())
+    }
 }
 
 /// `build LEVEL.obj --method portals|portals-fast -o L.pvs`: every automatic cell,
