@@ -84,40 +84,12 @@ pub fn encode_volumetric(
     boxes.extend(auto.cell_boxes());
     let cells: Vec<sightline_core::Cell> =
         boxes.into_iter().map(sightline_core::Cell::Box).collect();
-    let params = vec![
-        ("smallest_hole".to_string(), h.to_string()),
+    let extra = [
         ("eye_height".to_string(), eye.to_string()),
         ("viewcells".to_string(), viewcells.len().to_string()),
-        ("sources".to_string(), join(&clustered.source)),
-        (
-            "source_names".to_string(),
-            serde_json::to_string(&clustered.source_names)?,
-        ),
     ];
-    let header = sightline_pvs::Header::new(
-        clustered.scene.fingerprint(),
-        Method::Volumetric.name(),
-        params,
-        auto.objects,
-        cells.len(),
-    );
-    let present: Vec<u32> = (0..cells.len() as u32).collect();
-    let bytes = sightline_pvs::format::encode_cells(
-        &header,
-        &cells,
-        &present,
-        &sets,
-        &sightline_pvs::format::EncodeOptions::default(),
-    )?;
-    let n = viewcells.len();
-    Ok((
-        Level {
-            clustered,
-            auto,
-            bytes,
-        },
-        n,
-    ))
+    let level = level_pvs(clustered, auto, Method::Volumetric, &extra, &cells, &sets)?;
+    Ok((level, viewcells.len()))
 }
 
 /// `build LEVEL.obj -o L.pvs --method volumetric` (module doc of [`encode_volumetric`]).
@@ -557,20 +529,37 @@ pub fn encode(
     let sets: Vec<roaring::RoaringBitmap> = (0..auto.len())
         .map(|c| auto.pvs(c).into_iter().collect())
         .collect();
-    let params = vec![
-        (
-            "smallest_hole".to_string(),
-            auto.report.smallest_hole.to_string(),
-        ),
-        ("sources".to_string(), join(&clustered.source)),
-        (
-            "source_names".to_string(),
-            serde_json::to_string(&clustered.source_names)?,
-        ),
-    ];
+    let method = if full {
+        Method::Portals
+    } else {
+        Method::PortalsFast
+    };
+    level_pvs(clustered, auto, method, &[], &cells, &sets)
+}
+
+/// The `.pvs` of a mesh level: `cells` with their `sets`, the parameters every mesh
+/// level carries (the smallest hole, then `extra`, then the cluster → source mapping).
+fn level_pvs(
+    clustered: Clustered,
+    auto: AutoCells,
+    method: Method,
+    extra: &[(String, String)],
+    cells: &[sightline_core::Cell],
+    sets: &[roaring::RoaringBitmap],
+) -> anyhow::Result<Level> {
+    let mut params = vec![(
+        "smallest_hole".to_string(),
+        auto.report.smallest_hole.to_string(),
+    )];
+    params.extend_from_slice(extra);
+    params.push(("sources".to_string(), join(&clustered.source)));
+    params.push((
+        "source_names".to_string(),
+        serde_json::to_string(&clustered.source_names)?,
+    ));
     let header = sightline_pvs::Header::new(
         clustered.scene.fingerprint(),
-        method_name(full),
+        method.name(),
         params,
         auto.objects,
         cells.len(),
@@ -578,9 +567,9 @@ pub fn encode(
     let present: Vec<u32> = (0..cells.len() as u32).collect();
     let bytes = sightline_pvs::format::encode_cells(
         &header,
-        &cells,
+        cells,
         &present,
-        &sets,
+        sets,
         &sightline_pvs::format::EncodeOptions::default(),
     )?;
     Ok(Level {
