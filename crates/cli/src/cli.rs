@@ -147,6 +147,25 @@ pub enum Command {
         #[arg(short, long)]
         out: PathBuf,
     },
+    /// A mesh level's clusters, the ids its `.pvs` lists: as JSON (source object, box, the
+    /// file's triangles) or as a binary glTF with one node per cluster named by its id.
+    Clusters {
+        #[command(flatten)]
+        scene: SceneArg,
+        /// The voxel size the level is built with (as `build`; it sets the cluster grid).
+        #[arg(long, conflicts_with = "pvs")]
+        smallest_hole: Option<f64>,
+        /// A `.pvs` built from this level: its smallest hole, and a check that the
+        /// clusters are its ids (fingerprint).
+        #[arg(long)]
+        pvs: Option<PathBuf>,
+        /// Print the listing as JSON.
+        #[arg(long)]
+        json: bool,
+        /// Write the listing (`.json`) or the level as binary glTF (`.glb`).
+        #[arg(short, long)]
+        out: Option<PathBuf>,
+    },
     /// PVS of one viewcell with one method.
     #[command(after_help = methods_help())]
     Pvs {

@@ -8,6 +8,10 @@
 //! median centroid) until every piece is under the cap. One cluster per (object,
 //! piece), in object order then bucket order, so ids are deterministic. Blocks and
 //! flat objects stay whole (one cluster each).
+//!
+//! Each cluster keeps, per triangle, its index in its source object
+//! ([`Clustered::triangles`]), so a client can draw a cluster from the input file's own
+//! triangles (`sightline clusters`).
 
 use crate::{Mesh, Object, Scene};
 use sightline_geom::DVec3;
@@ -22,6 +26,9 @@ pub struct Clustered {
     pub source: Vec<u32>,
     /// Names of the source objects, in the input order (`info`'s order).
     pub source_names: Vec<Option<String>>,
+    /// `triangles[c][k]` = index, in its source object's [`Object::triangles`], of the
+    /// `k`-th triangle of cluster `c`.
+    pub triangles: Vec<Vec<u32>>,
 }
 
 impl Clustered {
@@ -53,10 +60,12 @@ pub fn cluster_scene(scene: &Scene, cluster_size: f64, max_triangles: usize) -> 
     };
     let mut objects = Vec::new();
     let mut source = Vec::new();
+    let mut triangles = Vec::new();
     for (id, o) in scene.objects.iter().enumerate() {
         let crate::Geometry::Mesh(mesh) = &o.geometry else {
             objects.push(o.clone());
             source.push(id as u32);
+            triangles.push((0..o.triangle_count() as u32).collect());
             continue;
         };
         let mut buckets: BTreeMap<[i64; 3], Vec<u32>> = BTreeMap::new();
@@ -70,6 +79,7 @@ pub fn cluster_scene(scene: &Scene, cluster_size: f64, max_triangles: usize) -> 
             for piece in split_cap(mesh, tris, cap) {
                 objects.push(sub_object(o.name.clone(), mesh, &piece));
                 source.push(id as u32);
+                triangles.push(piece);
             }
         }
     }
@@ -79,6 +89,7 @@ pub fn cluster_scene(scene: &Scene, cluster_size: f64, max_triangles: usize) -> 
         scene: clustered,
         source,
         source_names: scene.objects.iter().map(|o| o.name.clone()).collect(),
+        triangles,
     }
 }
 
@@ -181,6 +192,27 @@ mod tests {
         assert_eq!(total, 100);
         assert!(c.source.iter().all(|&s| s == 0));
         assert_eq!(c.sources_of(&[3, 7]), vec![0]);
+        assert_source_triangles(&strip(100), &c);
+    }
+
+    /// Every cluster triangle is its source's triangle at the recorded index, and every
+    /// source triangle lands in exactly one cluster.
+    fn assert_source_triangles(scene: &Scene, c: &Clustered) {
+        let mut seen: Vec<Vec<bool>> = scene
+            .objects
+            .iter()
+            .map(|o| vec![false; o.triangle_count()])
+            .collect();
+        for (k, o) in c.scene.objects.iter().enumerate() {
+            let src = c.source[k] as usize;
+            let from = scene.objects[src].triangles();
+            assert_eq!(c.triangles[k].len(), o.triangle_count());
+            for (t, &i) in o.triangles().iter().zip(&c.triangles[k]) {
+                assert_eq!(*t, from[i as usize]);
+                assert!(!std::mem::replace(&mut seen[src][i as usize], true));
+            }
+        }
+        assert!(seen.iter().flatten().all(|&s| s));
     }
 
     #[test]
@@ -189,5 +221,6 @@ mod tests {
         assert!(c.scene.objects.iter().all(|o| o.triangle_count() <= 16));
         let total: usize = c.scene.objects.iter().map(|o| o.triangle_count()).sum();
         assert_eq!(total, 100);
+        assert_source_triangles(&strip(100), &c);
     }
 }

@@ -1,5 +1,6 @@
-//! Writers: a scene as a GeoJSON FeatureCollection (blocks and flat objects) or as a
-//! Wavefront OBJ (any object, as triangles).
+//! Writers: a scene as a GeoJSON FeatureCollection (blocks and flat objects), as a
+//! Wavefront OBJ (any object, as triangles), or as a binary glTF with one node per
+//! object ([`glb`]).
 //!
 //! The GeoJSON is what the importer reads back: one feature per object, a
 //! `Polygon` (or `MultiPolygon` for several parts), properties `name`, `height` (= top),
@@ -18,6 +19,8 @@
 //! assert_eq!(v["features"][0]["properties"]["height"], 12.5);
 //! ```
 
+pub mod glb;
+
 use crate::{Geometry, Scene};
 use sightline_geom::{DVec2, Polygon};
 use std::io::Write;
@@ -29,6 +32,9 @@ pub enum ExportError {
     Object { index: usize, message: String },
     #[error(transparent)]
     Io(#[from] std::io::Error),
+    /// The writer itself failed (a document that cannot be serialized).
+    #[error("{0}")]
+    Format(String),
 }
 
 fn num(v: f64, index: usize) -> Result<String, ExportError> {

@@ -220,7 +220,7 @@ pub fn portal_mode(scene: &Path, method: &str) -> Option<bool> {
     }
 }
 
-fn options(smallest_hole: Option<f64>, full: bool) -> anyhow::Result<Options> {
+pub fn options(smallest_hole: Option<f64>, full: bool) -> anyhow::Result<Options> {
     if let Some(h) = smallest_hole {
         anyhow::ensure!(
             h.is_finite() && h > 0.0,
@@ -234,6 +234,14 @@ fn options(smallest_hole: Option<f64>, full: bool) -> anyhow::Result<Options> {
     })
 }
 
+/// The clusters of a mesh level, the ids every `.pvs` of it lists: the one place that
+/// decides them (`build`, `check`, `pvs`, `serve` and `clusters` all come here). They
+/// depend on the level and on `opts` (the smallest hole and voxel budget set the
+/// cluster grid, [`default_cluster_size`]).
+pub fn cluster_level(raw: &sightline_scene::Scene, opts: &Options) -> Clustered {
+    cluster_scene(raw, default_cluster_size(raw, opts), MAX_CLUSTER_TRIANGLES)
+}
+
 /// Load, cluster and cut the level into cells.
 fn prepare(
     scene: &SceneArg,
@@ -243,11 +251,7 @@ fn prepare(
 ) -> anyhow::Result<(Clustered, AutoCells)> {
     let raw = load_scene(scene)?;
     let opts = options(smallest_hole, full)?;
-    let clustered = cluster_scene(
-        &raw,
-        default_cluster_size(&raw, &opts),
-        MAX_CLUSTER_TRIANGLES,
-    );
+    let clustered = cluster_level(&raw, &opts);
     let spinner = crate::common::progress(1, quiet, "voxels, cells, portals, PVS of every cell");
     let auto = AutoCells::build(&clustered.scene, &opts)
         .with_context(|| format!("cannot cut {} into cells", scene.scene.display()))?;
@@ -590,11 +594,7 @@ pub fn clustered_for(scene: &SceneArg, file: &sightline_pvs::PvsFile) -> anyhow:
         .and_then(|(_, v)| v.parse::<f64>().ok());
     let raw = load_scene(scene)?;
     let opts = options(hole, false)?;
-    Ok(cluster_scene(
-        &raw,
-        default_cluster_size(&raw, &opts),
-        MAX_CLUSTER_TRIANGLES,
-    ))
+    Ok(cluster_level(&raw, &opts))
 }
 
 fn join(ids: &[u32]) -> String {

@@ -7,6 +7,7 @@ mod bsp_map;
 mod build;
 mod cells;
 mod check;
+mod clusters;
 mod demo;
 mod frames;
 mod gameplay;
@@ -29,6 +30,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         c @ Command::Generate { .. } => generate::run(c, quiet),
         c @ Command::Info { .. } => info::run(c, quiet),
         c @ Command::Cells { .. } => cells::run(c, quiet),
+        c @ Command::Clusters { .. } => clusters::run(c, quiet),
         c @ Command::Pvs { .. } => pvs::run(c, quiet),
         c @ Command::Truth { .. } => truth::run(c, quiet),
         // build, merge and query share the store's code.
