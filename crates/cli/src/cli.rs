@@ -355,13 +355,23 @@ pub enum Command {
         /// (default: `data/quake` when it exists).
         #[arg(long)]
         levels: Vec<PathBuf>,
-        /// Run only the indoor section (no city experiments).
+        /// Run only the level sections (indoor, and meshes with --meshes): no city
+        /// experiments.
         #[arg(long)]
         indoor_only: bool,
+        /// The mesh section (`volumetric` on walkable viewcells): a small generated level,
+        /// plus any mesh levels given (`.obj`, `.gltf`, `.glb`).
+        #[arg(long, num_args = 0.., value_name = "LEVEL")]
+        meshes: Option<Vec<PathBuf>>,
+        /// Mesh section: walkable viewcells per level whose PVS is computed, spread over
+        /// the level (default: 64 with --suite quick, all with full; 0: all).
+        #[arg(long)]
+        mesh_viewcells: Option<usize>,
         #[arg(short, long, default_value = "report")]
         out: PathBuf,
         /// Comma-separated experiments to run (default all): `Fig. 9`, `side by side`,
-        /// `Table 1`, `Fig. 12 + sweep`, `scaling`, `from-point`.
+        /// `Table 1`, `Fig. 12 + sweep`, `scaling`, `from-point`, or a section's levels:
+        /// `indoor`, `meshes`.
         #[arg(long)]
         only: Option<String>,
     },

@@ -3,6 +3,7 @@
 
 use super::indoor::IndoorRecord;
 use super::machine::Machine;
+use super::meshes::{MeshLevel, MeshRecord};
 use super::plots::{line_chart, Scale, Series};
 use super::report::{Report, Table};
 use super::suite::{Suite, NO_REPEAT_MS};
@@ -67,6 +68,8 @@ pub struct Bench {
     pub records: Vec<Record>,
     /// The indoor section's levels.
     pub indoor: Vec<IndoorRecord>,
+    /// The mesh section's levels.
+    pub meshes: Vec<MeshRecord>,
     pub notes: Vec<String>,
     pub from_point: Vec<super::from_point::FromPointRecord>,
     truths: HashMap<(String, String), Vec<u32>>,
@@ -103,6 +106,7 @@ impl Bench {
             suite,
             records: vec![],
             indoor: vec![],
+            meshes: vec![],
             notes: vec![],
             from_point: vec![],
             truths: HashMap::new(),
@@ -116,7 +120,7 @@ impl Bench {
         }
     }
 
-    fn truth_opts(&self) -> TruthOptions {
+    pub(crate) fn truth_opts(&self) -> TruthOptions {
         let mut t = TruthOptions::default();
         if let Some(s) = self.suite.truth_samples {
             t.samples = s;
@@ -760,12 +764,14 @@ fn scaling(b: &mut Bench, names: &[String], rep: &mut Report, out: &Path) -> any
     Ok(())
 }
 
-/// Which parts of the suite run: the city experiments, and the indoor section on
-/// `levels` (`.bsp` files; none skips it).
+/// Which parts of the suite run: the city experiments, the indoor section on
+/// `levels` (`.bsp` files; none skips it) and the mesh section on `meshes` (none skips
+/// it).
 #[derive(Clone, Debug)]
 pub struct Sections {
     pub cities: bool,
     pub levels: Vec<PathBuf>,
+    pub meshes: Vec<MeshLevel>,
 }
 
 impl Default for Sections {
@@ -773,6 +779,7 @@ impl Default for Sections {
         Sections {
             cities: true,
             levels: Vec::new(),
+            meshes: Vec::new(),
         }
     }
 }
@@ -860,24 +867,53 @@ pub fn run(
             Box::new(|b, r| super::indoor::write_section(&b.suite, &b.indoor, r, out)),
         ));
     }
+    // Likewise one experiment per mesh level, then the section.
+    let mesh_names: Vec<String> = sections
+        .meshes
+        .iter()
+        .map(|m| format!("meshes {}", m.name()))
+        .collect();
+    for (level, name) in sections.meshes.iter().zip(&mesh_names) {
+        experiments.push((
+            name.as_str(),
+            Box::new(move |b, _| {
+                let (suite, quiet, truth) = (b.suite.clone(), b.quiet, b.truth_opts());
+                super::meshes::measure_into(
+                    &suite,
+                    level,
+                    &truth,
+                    &mut b.meshes,
+                    &mut b.notes,
+                    quiet,
+                );
+                Ok(())
+            }),
+        ));
+    }
+    if !sections.meshes.is_empty() {
+        experiments.push((
+            "meshes report",
+            Box::new(|b, r| super::meshes::write_section(&b.meshes, r, out)),
+        ));
+    }
     let known: Vec<&str> = experiments.iter().map(|e| e.0).collect();
     let experiments: Vec<(&str, Experiment)> = match &suite.only {
         None => experiments,
         Some(only) => {
             for o in only {
-                if !known.iter().any(|k| k.eq_ignore_ascii_case(o)) {
+                if !known.iter().any(|k| selects(o, k)) {
                     anyhow::bail!("unknown experiment '{o}' (known: {})", known.join(", "));
                 }
             }
             experiments
                 .into_iter()
-                .filter(|e| only.iter().any(|o| o.eq_ignore_ascii_case(e.0)))
+                .filter(|e| only.iter().any(|o| selects(o, e.0)))
                 .collect()
         }
     };
     anyhow::ensure!(
         !experiments.is_empty(),
-        "nothing to run: --indoor-only needs a level (--levels LEVEL.bsp|FOLDER)"
+        "nothing to run: --indoor-only needs a level (--levels LEVEL.bsp|FOLDER) or --meshes"
     );
     let total = experiments.len();
     let mut parts: Vec<(&str, f64)> = Vec::new();
@@ -890,6 +926,18 @@ pub fn run(
         write_report(&suite, &machine, &b, &rep, started, &parts, done, out)?;
     }
     Ok(())
+}
+
+/// Whether `--only` entry `o` selects experiment `name`: its name, or its section
+/// (`indoor`, `meshes`: every experiment of the section), case-insensitive.
+fn selects(o: &str, name: &str) -> bool {
+    name.eq_ignore_ascii_case(o)
+        || name
+            .split_once(' ')
+            .is_some_and(|(section, _)| section.eq_ignore_ascii_case(o))
+            && ["indoor", "meshes"]
+                .iter()
+                .any(|s| s.eq_ignore_ascii_case(o))
 }
 
 /// `out/README.md` (with the notes and the footer) and `out/raw.json` as they stand;
@@ -915,6 +963,7 @@ fn write_report(
         machine: &'a Machine,
         records: &'a [Record],
         indoor: &'a [IndoorRecord],
+        meshes: &'a [MeshRecord],
         from_point: &'a [super::from_point::FromPointRecord],
         notes: &'a [String],
     }
@@ -923,6 +972,7 @@ fn write_report(
         machine,
         records: &b.records,
         indoor: &b.indoor,
+        meshes: &b.meshes,
         from_point: &b.from_point,
         notes: &b.notes,
     })?;
@@ -963,6 +1013,8 @@ mod tests {
             from_point_truth_every: 1,
             from_point_walk_frames: 3,
             from_point_scenes: vec![],
+            mesh_viewcells: Some(2),
+            mesh_judged: 1,
             only: None,
         };
         let dir = std::env::temp_dir().join(format!("sightline-bench-{}", std::process::id()));

@@ -68,11 +68,11 @@ pub fn find_levels(paths: &[PathBuf]) -> anyhow::Result<Vec<PathBuf>> {
 
 /// Reset the process's peak resident size (Linux ≥ 4.0), so the next reading is this
 /// level's own peak.
-fn reset_peak() {
+pub(super) fn reset_peak() {
     std::fs::write("/proc/self/clear_refs", "5").ok();
 }
 
-fn peak_mib() -> f64 {
+pub(super) fn peak_mib() -> f64 {
     sightline_stats::memory_kib().1 as f64 / 1024.0
 }
 

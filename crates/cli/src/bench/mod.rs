@@ -10,10 +10,12 @@ mod experiments;
 mod from_point;
 mod indoor;
 mod machine;
+mod meshes;
 mod plots;
 mod report;
 mod suite;
 
 pub use experiments::{run, Sections};
 pub use indoor::find_levels;
+pub use meshes::MeshLevel;
 pub use suite::Suite;

@@ -41,6 +41,10 @@ pub struct Suite {
     /// Scene files the from-point section adds when present and not given with
     /// `--scene` (relative to the working directory: the repository's `data/`).
     pub from_point_scenes: Vec<String>,
+    /// Mesh section: walkable viewcells per level whose PVS is computed, spread over
+    /// the list (`None`: all), and how many of them the truth judges.
+    pub mesh_viewcells: Option<usize>,
+    pub mesh_judged: usize,
     /// Run only these experiments (`bench --only`; names as in the report's footer,
     /// case-insensitive); all when `None`.
     pub only: Option<Vec<String>>,
@@ -73,6 +77,8 @@ impl Suite {
                 from_point_truth_every: 4,
                 from_point_walk_frames: 60,
                 from_point_scenes: vec!["data/lyon1_bdtopo.geojson".into()],
+                mesh_viewcells: Some(64),
+                mesh_judged: 8,
                 only: None,
             }),
             "full" => Ok(Suite {
@@ -99,6 +105,8 @@ impl Suite {
                 from_point_truth_every: 10,
                 from_point_walk_frames: 200,
                 from_point_scenes: vec!["data/lyon1_bdtopo.geojson".into()],
+                mesh_viewcells: None,
+                mesh_judged: 20,
                 only: None,
             }),
             other => anyhow::bail!("unknown suite '{other}' (known: quick, full)"),

@@ -1,6 +1,6 @@
 //! `sightline bench`: see [`crate::bench`].
 
-use crate::bench::{find_levels, run as run_bench, Sections, Suite};
+use crate::bench::{find_levels, run as run_bench, MeshLevel, Sections, Suite};
 use crate::cli::Command;
 use std::path::PathBuf;
 
@@ -14,6 +14,8 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         methods,
         levels,
         indoor_only,
+        meshes,
+        mesh_viewcells,
         out,
         only,
     } = cmd
@@ -21,6 +23,9 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         unreachable!("dispatched by commands::run")
     };
     let mut suite = Suite::named(&suite)?;
+    if let Some(n) = mesh_viewcells {
+        suite.mesh_viewcells = (n > 0).then_some(n);
+    }
     suite.only = only.map(|o| {
         o.split(',')
             .map(|s| s.trim().to_string())
@@ -43,9 +48,16 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
     } else {
         find_levels(&levels)?
     };
+    // --meshes: the generated level first, then the files given.
+    let meshes = meshes.map_or_else(Vec::new, |files| {
+        std::iter::once(MeshLevel::Generated)
+            .chain(files.into_iter().map(MeshLevel::File))
+            .collect()
+    });
     let sections = Sections {
         cities: !indoor_only,
         levels,
+        meshes,
     };
     run_bench(suite, &scene, methods, &sections, &out, quiet)?;
     if !quiet {

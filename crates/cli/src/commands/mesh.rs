@@ -8,6 +8,7 @@ use crate::cli::SceneArg;
 use crate::common::{load_scene, print_json};
 use anyhow::Context;
 use serde::Serialize;
+use sightline_autocells::cells::VoxelBox;
 use sightline_autocells::judge::JudgedCell;
 use sightline_autocells::{default_cluster_size, AutoCells, Options, MAX_CLUSTER_TRIANGLES};
 use sightline_core::check::TruthOptions;
@@ -35,6 +36,30 @@ pub fn default_eye_height(smallest_hole: f64) -> f64 {
 /// Width of the walkable viewcells, in voxels.
 pub const VIEWCELL_WIDTH: usize = 8;
 
+/// The eye height (`eye_height`, else [`default_eye_height`]) and the walkable
+/// viewcells of a cut level, as `build` stores them.
+pub fn walkable_viewcells(
+    auto: &AutoCells,
+    eye_height: Option<f64>,
+) -> anyhow::Result<(f64, Vec<VoxelBox>)> {
+    let eye = eye_height.unwrap_or_else(|| default_eye_height(auto.report.smallest_hole));
+    anyhow::ensure!(
+        eye.is_finite() && eye > 0.0,
+        "--eye-height must be a positive number of scene units, got {eye}"
+    );
+    let viewcells = auto.viewcells(&sightline_autocells::viewcells::Walker {
+        eye_height: eye,
+        width: VIEWCELL_WIDTH,
+    });
+    Ok((eye, viewcells))
+}
+
+/// Up to `k` of `items`, spread evenly over the list (the viewcells `check` judges).
+pub fn spread<T: Copy>(items: &[T], k: usize) -> Vec<T> {
+    let step = (items.len() / k.max(1)).max(1);
+    items.iter().copied().step_by(step).take(k).collect()
+}
+
 /// `build LEVEL.obj -o L.pvs` with `volumetric` (the default on a mesh level): the
 /// walkable viewcells first, each with its volumetric ∩ portal PVS, then every
 /// automatic cell with its portal PVS (any other point of free space: a flying
@@ -49,17 +74,7 @@ pub fn encode_volumetric(
 ) -> anyhow::Result<(Level, usize)> {
     use rayon::prelude::*;
     let (clustered, auto) = prepare(scene, smallest_hole, false, quiet)?;
-    let h = auto.report.smallest_hole;
-    let eye = eye_height.unwrap_or_else(|| default_eye_height(h));
-    anyhow::ensure!(
-        eye.is_finite() && eye > 0.0,
-        "--eye-height must be a positive number of scene units, got {eye}"
-    );
-    let walker = sightline_autocells::viewcells::Walker {
-        eye_height: eye,
-        width: VIEWCELL_WIDTH,
-    };
-    let viewcells = auto.viewcells(&walker);
+    let (eye, viewcells) = walkable_viewcells(&auto, eye_height)?;
     if viewcells.is_empty() && !quiet {
         eprintln!("warning: no walkable floor (no upward surface with room for the eye at {eye}): every cell is free space");
     }
@@ -135,22 +150,13 @@ pub fn check_volumetric(
     use rayon::prelude::*;
     let t = Instant::now();
     let (clustered, auto) = prepare(scene, smallest_hole, false, quiet)?;
-    let eye = eye_height.unwrap_or_else(|| default_eye_height(auto.report.smallest_hole));
-    anyhow::ensure!(
-        eye.is_finite() && eye > 0.0,
-        "--eye-height must be a positive number of scene units, got {eye}"
-    );
-    let viewcells = auto.viewcells(&sightline_autocells::viewcells::Walker {
-        eye_height: eye,
-        width: VIEWCELL_WIDTH,
-    });
+    let (eye, viewcells) = walkable_viewcells(&auto, eye_height)?;
     anyhow::ensure!(
         !viewcells.is_empty(),
         "no walkable floor in {} (no upward surface with room for the eye at {eye})",
         scene.scene.display()
     );
-    let step = (viewcells.len() / k.max(1)).max(1);
-    let picked: Vec<_> = viewcells.iter().copied().step_by(step).take(k).collect();
+    let picked = spread(&viewcells, k);
     let vol = auto.volumetric();
     let pvs: Vec<Vec<u32>> = picked
         .par_iter()
@@ -250,11 +256,29 @@ fn prepare(
     quiet: bool,
 ) -> anyhow::Result<(Clustered, AutoCells)> {
     let raw = load_scene(scene)?;
+    cut_level(
+        &raw,
+        &scene.scene.display().to_string(),
+        smallest_hole,
+        full,
+        quiet,
+    )
+}
+
+/// Cluster a loaded level (`name` for messages) and cut it into cells with their PVS
+/// (`full`: the flow, else the base flood), as `build` does; warnings unless `quiet`.
+pub fn cut_level(
+    raw: &sightline_scene::Scene,
+    name: &str,
+    smallest_hole: Option<f64>,
+    full: bool,
+    quiet: bool,
+) -> anyhow::Result<(Clustered, AutoCells)> {
     let opts = options(smallest_hole, full)?;
-    let clustered = cluster_level(&raw, &opts);
+    let clustered = cluster_level(raw, &opts);
     let spinner = crate::common::progress(1, quiet, "voxels, cells, portals, PVS of every cell");
     let auto = AutoCells::build(&clustered.scene, &opts)
-        .with_context(|| format!("cannot cut {} into cells", scene.scene.display()))?;
+        .with_context(|| format!("cannot cut {name} into cells"))?;
     spinner.finish_and_clear();
     if !quiet {
         let r = &auto.report;

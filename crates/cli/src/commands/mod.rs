@@ -14,7 +14,7 @@ mod gameplay;
 mod generate;
 mod info;
 mod map;
-mod mesh;
+pub(crate) mod mesh;
 mod pvs;
 mod serve;
 mod tiles;
