@@ -74,6 +74,11 @@ TILES_TMP="$(mktemp -d)"
 target/debug/sightline generate city --size 80 -o "$TILES_TMP/city.geojson" >/dev/null
 target/debug/sightline --quiet tiles "$TILES_TMP/city.geojson" --max-features-per-tile 8 -o "$TILES_TMP/tileset"
 node crates/tiles/validate/validate.mjs "$TILES_TMP/tileset"
+# A mesh level's clusters as glTF (`sightline clusters -o L.glb`): the same validator,
+# one scene, every node named by its cluster id (crates/tiles/validate/validate-glb.mjs).
+target/debug/sightline generate forest --size 12 -o "$TILES_TMP/forest.obj" >/dev/null
+target/debug/sightline --quiet clusters "$TILES_TMP/forest.obj" -o "$TILES_TMP/forest.glb"
+node crates/tiles/validate/validate-glb.mjs "$TILES_TMP/forest.glb"
 rm -rf "$TILES_TMP"
 node crates/server/e2e/tiles.test.mjs
 
