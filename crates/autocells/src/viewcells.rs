@@ -46,12 +46,7 @@ pub fn walkable(v: &Voxels, tris: &[[DVec3; 3]], walker: &Walker) -> Vec<VoxelBo
     let g = &v.grid;
     let [nx, ny, nz] = g.dims;
     let eye = ((walker.eye_height.max(0.0) / g.size).ceil() as usize).max(1);
-    let is_floor = |i: usize| {
-        v.state[i] == SURFACE
-            && v.triangles_in(i)
-                .iter()
-                .any(|&t| horizontal(&tris[t as usize]))
-    };
+    let is_floor = |i: usize| is_floor(v, tris, i);
     let open = |i: usize| v.state[i] == AIR || v.state[i] == SURFACE;
     // Standing levels: z of the floor voxel → columns (x, y).
     let mut levels: BTreeMap<usize, Vec<(usize, usize)>> = BTreeMap::new();
@@ -122,4 +117,96 @@ pub fn walkable(v: &Voxels, tris: &[[DVec3; 3]], walker: &Walker) -> Vec<VoxelBo
         }
     }
     out
+}
+
+/// The viewcells a walker reaches from the voxels `starts`, generously. The walker
+/// moves through *walk space*: open voxels at most `reach` voxels above a floor voxel
+/// (the module's floors), in any of six directions — so it climbs stairs, slopes and
+/// any wall at most `reach` voxels high, and passes doors too low for the eye's
+/// room; it steps off a ledge into open space beside it and falls straight down
+/// through open voxels until it meets walk space again. No collision model (a gap a
+/// body cannot pass counts as passable), so a point where a walker can stand stays in
+/// a kept viewcell; teleporters and lifts need a start of their own. Returns the
+/// indices of the viewcells holding a reached voxel, ascending.
+pub fn reachable(
+    v: &Voxels,
+    tris: &[[DVec3; 3]],
+    cells: &[VoxelBox],
+    starts: &[[usize; 3]],
+    reach: usize,
+) -> Vec<usize> {
+    let g = &v.grid;
+    let [nx, ny, nz] = g.dims;
+    let open = |i: usize| v.state[i] == AIR || v.state[i] == SURFACE;
+    // Height above the nearest floor voxel below, through open voxels.
+    let mut walk = vec![false; g.len()];
+    for y in 0..ny {
+        for x in 0..nx {
+            let mut above: Option<usize> = None;
+            for z in 0..nz {
+                let i = g.index(x, y, z);
+                if is_floor(v, tris, i) {
+                    above = Some(0);
+                } else if open(i) {
+                    above = above.map(|d| d + 1);
+                } else {
+                    above = None;
+                }
+                walk[i] = open(i) && above.is_some_and(|d| d <= reach);
+            }
+        }
+    }
+    const WALK: u8 = 1;
+    const FALL: u8 = 2;
+    let mut state = vec![0u8; g.len()];
+    let mut todo: Vec<usize> = Vec::new();
+    for s in starts {
+        if (0..3).all(|k| s[k] < g.dims[k]) {
+            let i = g.index(s[0], s[1], s[2]);
+            if open(i) && state[i] == 0 {
+                state[i] = if walk[i] { WALK } else { FALL };
+                todo.push(i);
+            }
+        }
+    }
+    while let Some(i) = todo.pop() {
+        let [x, y, z] = g.coords(i);
+        let mut go = |j: usize, falling: bool, state: &mut Vec<u8>| {
+            if state[j] == 0 && open(j) && (walk[j] || falling) {
+                state[j] = if walk[j] { WALK } else { FALL };
+                todo.push(j);
+            }
+        };
+        if z > 0 {
+            go(g.index(x, y, z - 1), true, &mut state);
+        }
+        if state[i] == WALK {
+            if z + 1 < nz {
+                go(g.index(x, y, z + 1), false, &mut state);
+            }
+            // Sideways: into walk space, or off a ledge into open space to fall.
+            for (dx, dy) in [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)] {
+                let (xx, yy) = (x as i64 + dx, y as i64 + dy);
+                if xx >= 0 && yy >= 0 && (xx as usize) < nx && (yy as usize) < ny {
+                    go(g.index(xx as usize, yy as usize, z), true, &mut state);
+                }
+            }
+        }
+    }
+    (0..cells.len())
+        .filter(|&c| {
+            let b = &cells[c];
+            (b.lo[2]..b.hi[2]).any(|z| {
+                (b.lo[1]..b.hi[1]).any(|y| (b.lo[0]..b.hi[0]).any(|x| state[g.index(x, y, z)] != 0))
+            })
+        })
+        .collect()
+}
+
+/// A floor voxel: a surface voxel holding a triangle within about 45° of horizontal.
+fn is_floor(v: &Voxels, tris: &[[DVec3; 3]], i: usize) -> bool {
+    v.state[i] == SURFACE
+        && v.triangles_in(i)
+            .iter()
+            .any(|&t| horizontal(&tris[t as usize]))
 }

@@ -186,3 +186,63 @@ proptest! {
         }
     }
 }
+
+/// Two rooms on the lattice, joined by a door or not; the eye 1.7 above the floor.
+fn rooms(door: bool) -> Scene {
+    testlevel::lattice_level(
+        0.5,
+        [24, 10, 7],
+        DVec3::new(-6.0, -3.0, 0.0),
+        move |i, _j, k| {
+            let x = -6.0 + 0.5 * i as f64 + 0.25;
+            let z = 0.5 * k as f64 + 0.25;
+            z < 3.0 && (x.abs() > 0.5 || (door && z < 2.0))
+        },
+        &[],
+    )
+}
+
+#[test]
+fn spawn_points_keep_every_reachable_floor_and_drop_sealed_rooms() {
+    use sightline_autocells::viewcells::reachable;
+    for door in [true, false] {
+        let scene = rooms(door);
+        let auto = build(&scene, 0.5);
+        let cells = auto.viewcells(&Walker {
+            eye_height: 1.7,
+            width: 4,
+        });
+        let g = &auto.voxels.grid;
+        let vox = |p: DVec3| ((p - g.origin) / g.size).to_array();
+        let spawn = vox(DVec3::new(-4.0, -1.0, 0.1)).map(|x| x as usize);
+        let kept = reachable(&auto.voxels, &auto.tris, &cells, &[spawn], 5);
+        let world: Vec<_> = kept
+            .iter()
+            .map(|&c| sightline_autocells::cells::world_box(&auto.voxels, &cells[c]))
+            .collect();
+        for i in 0..40 {
+            for j in 0..8 {
+                let p = DVec3::new(-5.9 + 0.3 * i as f64, -2.9 + 0.29 * j as f64, 1.7);
+                if p.x.abs() < 0.6 {
+                    continue;
+                }
+                let in_kept = world.iter().any(|c| c.contains(p));
+                if door || p.x < 0.0 {
+                    assert!(
+                        in_kept,
+                        "door {door}: the eye at {p:?} is in no kept viewcell"
+                    );
+                } else {
+                    assert!(!in_kept, "the sealed room's floor at {p:?} was kept");
+                }
+            }
+        }
+        assert_eq!(
+            kept.len() == cells.len(),
+            door,
+            "{} of {}",
+            kept.len(),
+            cells.len()
+        );
+    }
+}

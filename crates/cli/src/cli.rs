@@ -253,6 +253,15 @@ pub enum Command {
         /// units; default 1.7, or 3.5 voxels when the voxels are coarser).
         #[arg(long)]
         eye_height: Option<f64>,
+        /// Mesh levels with `volumetric`: keep only the viewcells a walker reaches from
+        /// this point `X,Y,Z` (repeat for several; docs/methods/volumetric.md).
+        #[arg(long = "spawn", value_parser = parse_point, allow_hyphen_values = true)]
+        spawn: Vec<[f64; 3]>,
+        /// Mesh levels with `volumetric`: viewcells from a JSON array of boxes
+        /// `[{"min": [x, y, z], "max": [x, y, z]}, …]` (scene units) instead of the
+        /// walkable floors.
+        #[arg(long)]
+        view_volumes: Option<PathBuf>,
     },
     /// Merge shard .pvs files into one.
     Merge {
@@ -318,6 +327,13 @@ pub enum Command {
         /// floor (scene units; default 1.7, or 3.5 voxels when the voxels are coarser).
         #[arg(long)]
         eye_height: Option<f64>,
+        /// Mesh levels with `volumetric`: judge only viewcells a walker reaches from this
+        /// point `X,Y,Z` (repeatable; as `build`).
+        #[arg(long = "spawn", value_parser = parse_point, allow_hyphen_values = true)]
+        spawn: Vec<[f64; 3]>,
+        /// Mesh levels with `volumetric`: the viewcells from a JSON file of boxes (as `build`).
+        #[arg(long)]
+        view_volumes: Option<PathBuf>,
         #[arg(long)]
         json: bool,
     },

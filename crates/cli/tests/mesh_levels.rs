@@ -174,3 +174,92 @@ fn build_defaults_to_walkable_viewcells_on_a_mesh_level() {
     assert_ne!(code, 0);
     assert!(err.starts_with("error:"), "{err}");
 }
+
+#[test]
+fn spawn_points_and_view_volumes_set_the_viewcells() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = level(dir.path());
+    // The count `build` reports: "wrote L.pvs: N walkable viewcells and …".
+    let viewcells = |err: &str| -> u64 {
+        let at = err
+            .find(" walkable viewcells")
+            .expect("the build's summary");
+        err[..at]
+            .rsplit(' ')
+            .next()
+            .and_then(|n| n.parse().ok())
+            .expect("a count")
+    };
+    let all = dir.path().join("all.pvs").to_string_lossy().into_owned();
+    let (code, _, err) = sightline(&["build", &obj, "--smallest-hole", "0.5", "-o", &all]);
+    assert_eq!(code, 0, "{err}");
+    let all_cells = viewcells(&err);
+    // Every room of the test level is reached from room A: the same viewcells.
+    let spawned = dir.path().join("spawn.pvs").to_string_lossy().into_owned();
+    let (code, _, err) = sightline(&[
+        "build",
+        &obj,
+        "--smallest-hole",
+        "0.5",
+        "--spawn=-4.5,-2,0.1",
+        "-o",
+        &spawned,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(viewcells(&err), all_cells);
+    let (code, out, _) = sightline(&["query", &spawned, "--at=-4.5,-2,1.7", "--json"]);
+    assert_eq!(code, 0);
+    let q: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(q["free_space"], false, "{q}");
+    // View volumes: one box in room A is the one viewcell.
+    let boxes = dir.path().join("volumes.json");
+    std::fs::write(
+        &boxes,
+        r#"[{"min": [-5, -2.5, 0.2], "max": [-3, -1, 1.8]}]"#,
+    )
+    .unwrap();
+    let vv = dir.path().join("vv.pvs").to_string_lossy().into_owned();
+    let boxes_s = boxes.to_string_lossy().into_owned();
+    let (code, _, err) = sightline(&[
+        "build",
+        &obj,
+        "--smallest-hole",
+        "0.5",
+        "--view-volumes",
+        &boxes_s,
+        "-o",
+        &vv,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(viewcells(&err), 1);
+    let (code, out, _) = sightline(&["query", &vv, "--at=-4,-2,1", "--json"]);
+    assert_eq!(code, 0);
+    let q: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(q["free_space"], false, "{q}");
+    // Bad input: one error line, no file.
+    std::fs::write(&boxes, r#"[{"min": [1, 1, 1]}]"#).unwrap();
+    let bad = dir.path().join("bad.pvs");
+    let bad_s = bad.to_string_lossy().into_owned();
+    for args in [
+        vec!["--view-volumes", boxes_s.as_str()],
+        vec!["--spawn=-4.5,-2,-50"],
+        vec!["--spawn=-4.5,-2,0.1", "--view-volumes", boxes_s.as_str()],
+    ] {
+        let mut a = vec![
+            "build",
+            obj.as_str(),
+            "--smallest-hole",
+            "0.5",
+            "-o",
+            bad_s.as_str(),
+        ];
+        a.extend(args.iter().copied());
+        let (code, _, err) = sightline(&a);
+        assert_ne!(code, 0, "{args:?}");
+        assert!(
+            err.starts_with("error:") && err.trim().lines().count() == 1,
+            "{err}"
+        );
+        assert!(!bad.exists());
+    }
+}

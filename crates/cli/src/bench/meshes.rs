@@ -126,7 +126,7 @@ pub fn measure_level(
     let t = Instant::now();
     let (clustered, auto) = mesh::cut_level(&raw, &name, hole, false, true)?;
     let seconds_cut = t.elapsed().as_secs_f64();
-    let (eye, viewcells) = mesh::walkable_viewcells(&auto, None)?;
+    let (eye, viewcells) = mesh::walkable_viewcells(&auto, &mesh::Standing::default())?;
     anyhow::ensure!(
         !viewcells.is_empty(),
         "no walkable floor in {name} (no upward surface with room for the eye at {eye})"

@@ -27,7 +27,14 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
             shard,
             smallest_hole,
             eye_height,
+            spawn,
+            view_volumes,
         } => {
+            let standing = crate::commands::mesh::Standing {
+                eye_height,
+                spawns: spawn,
+                view_volumes,
+            };
             let mesh = crate::commands::mesh::is_mesh(&scene.scene);
             let method = method.unwrap_or_else(|| {
                 if mesh {
@@ -44,11 +51,15 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
                 return crate::commands::mesh::build_volumetric(
                     &scene,
                     smallest_hole,
-                    eye_height,
+                    &standing,
                     &out,
                     quiet,
                 );
             }
+            anyhow::ensure!(
+                !standing.is_set(),
+                "--eye-height, --spawn and --view-volumes set the viewcells of a mesh level (.obj, .gltf, .glb) with --method volumetric"
+            );
             let opts = method_options(&method, resolution, sweep, planes, &set)?;
             if let Some(full) = crate::commands::mesh::portal_mode(&scene.scene, &method) {
                 anyhow::ensure!(

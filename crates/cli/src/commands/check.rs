@@ -59,6 +59,8 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         reference,
         smallest_hole,
         eye_height,
+        spawn,
+        view_volumes,
         json,
     } = cmd
     else {
@@ -71,17 +73,22 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
             cells.as_deref(),
             "on a mesh level, --cells is a number of walkable viewcells to judge",
         )?;
+        let standing = crate::commands::mesh::Standing {
+            eye_height,
+            spawns: spawn,
+            view_volumes,
+        };
         return crate::commands::mesh::check_volumetric(
             &scene,
             smallest_hole,
-            eye_height,
+            &standing,
             k,
             json,
             quiet,
         );
     }
-    if eye_height.is_some() {
-        bail!("--eye-height sets the walkable viewcells of a mesh level (.obj, .gltf, .glb) with --method volumetric");
+    if eye_height.is_some() || !spawn.is_empty() || view_volumes.is_some() {
+        bail!("--eye-height, --spawn and --view-volumes set the walkable viewcells of a mesh level (.obj, .gltf, .glb) with --method volumetric");
     }
     if let Some(full) = method
         .as_deref()

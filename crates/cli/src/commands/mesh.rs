@@ -15,7 +15,7 @@ use sightline_core::check::TruthOptions;
 use sightline_core::Method;
 use sightline_geom::ViewCell;
 use sightline_scene::clusters::{cluster_scene, Clustered};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 pub fn is_mesh(path: &Path) -> bool {
@@ -36,22 +36,116 @@ pub fn default_eye_height(smallest_hole: f64) -> f64 {
 /// Width of the walkable viewcells, in voxels.
 pub const VIEWCELL_WIDTH: usize = 8;
 
-/// The eye height (`eye_height`, else [`default_eye_height`]) and the walkable
-/// viewcells of a cut level, as `build` stores them.
+/// Where viewers stand on a mesh level (`build`/`check` flags): the eye height, the
+/// spawn points a walker floods from, or view volumes given instead of the floors.
+#[derive(Clone, Debug, Default)]
+pub struct Standing {
+    /// `--eye-height` (else [`default_eye_height`]).
+    pub eye_height: Option<f64>,
+    /// `--spawn X,Y,Z`: keep the viewcells a walker reaches from these points.
+    pub spawns: Vec<[f64; 3]>,
+    /// `--view-volumes FILE.json`: boxes in scene units, used as the viewcells.
+    pub view_volumes: Option<PathBuf>,
+}
+
+impl Standing {
+    /// Whether anything but the defaults was asked (the flags apply to mesh levels only).
+    pub fn is_set(&self) -> bool {
+        self.eye_height.is_some() || !self.spawns.is_empty() || self.view_volumes.is_some()
+    }
+}
+
+/// A view volume of `--view-volumes`.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ViewVolume {
+    min: [f64; 3],
+    max: [f64; 3],
+}
+
+/// The eye height and the viewcells of a cut level, as `build` stores them: the
+/// walkable viewcells (those a walker reaches from the spawn points, when given), or
+/// the view volumes (rounded out to whole voxels).
 pub fn walkable_viewcells(
     auto: &AutoCells,
-    eye_height: Option<f64>,
+    standing: &Standing,
 ) -> anyhow::Result<(f64, Vec<VoxelBox>)> {
-    let eye = eye_height.unwrap_or_else(|| default_eye_height(auto.report.smallest_hole));
+    let h = auto.report.smallest_hole;
+    let eye = standing.eye_height.unwrap_or_else(|| default_eye_height(h));
     anyhow::ensure!(
         eye.is_finite() && eye > 0.0,
         "--eye-height must be a positive number of scene units, got {eye}"
     );
+    let g = &auto.voxels.grid;
+    let to_voxels =
+        |p: [f64; 3]| -> [f64; 3] { std::array::from_fn(|k| (p[k] - g.origin[k]) / g.size) };
+    if let Some(path) = &standing.view_volumes {
+        anyhow::ensure!(
+            standing.spawns.is_empty(),
+            "--view-volumes gives the viewcells: --spawn has nothing to flood"
+        );
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        let volumes: Vec<ViewVolume> = serde_json::from_str(&text).with_context(|| {
+            format!(
+                "{}: expected a JSON array of boxes {{\"min\": [x, y, z], \"max\": [x, y, z]}}",
+                path.display()
+            )
+        })?;
+        let mut out = Vec::with_capacity(volumes.len());
+        for (i, v) in volumes.iter().enumerate() {
+            let (lo, hi) = (to_voxels(v.min), to_voxels(v.max));
+            anyhow::ensure!(
+                (0..3).all(|k| lo[k].is_finite() && hi[k].is_finite() && lo[k] <= hi[k]),
+                "{}: view volume {i} is not a box (min {:?}, max {:?})",
+                path.display(),
+                v.min,
+                v.max
+            );
+            let b = VoxelBox {
+                lo: std::array::from_fn(|k| (lo[k].floor().max(0.0) as usize).min(g.dims[k])),
+                hi: std::array::from_fn(|k| (hi[k].ceil().max(0.0) as usize).min(g.dims[k])),
+            };
+            anyhow::ensure!(
+                (0..3).all(|k| b.lo[k] < b.hi[k]),
+                "{}: view volume {i} lies outside the level",
+                path.display()
+            );
+            out.push(b);
+        }
+        return Ok((eye, out));
+    }
     let viewcells = auto.viewcells(&sightline_autocells::viewcells::Walker {
         eye_height: eye,
         width: VIEWCELL_WIDTH,
     });
-    Ok((eye, viewcells))
+    if standing.spawns.is_empty() {
+        return Ok((eye, viewcells));
+    }
+    let mut starts = Vec::new();
+    for s in &standing.spawns {
+        let p = to_voxels(*s);
+        let inside = (0..3).all(|k| p[k].is_finite() && p[k] >= 0.0 && p[k] < g.dims[k] as f64);
+        let c = p.map(|x| x as usize);
+        anyhow::ensure!(
+            inside && auto.voxels.is_open(g.index(c[0], c[1], c[2])),
+            "spawn point {},{},{} lies in no open voxel (inside a wall or outside the level)",
+            s[0],
+            s[1],
+            s[2]
+        );
+        starts.push(c);
+    }
+    // Walk space: open voxels up to twice the eye height above a floor.
+    let reach = (2.0 * eye / h).ceil() as usize;
+    let kept = sightline_autocells::viewcells::reachable(
+        &auto.voxels,
+        &auto.tris,
+        &viewcells,
+        &starts,
+        reach,
+    );
+    Ok((eye, kept.into_iter().map(|c| viewcells[c]).collect()))
 }
 
 /// Up to `k` of `items`, spread evenly over the list (the viewcells `check` judges).
@@ -69,12 +163,12 @@ pub fn spread<T: Copy>(items: &[T], k: usize) -> Vec<T> {
 pub fn encode_volumetric(
     scene: &SceneArg,
     smallest_hole: Option<f64>,
-    eye_height: Option<f64>,
+    standing: &Standing,
     quiet: bool,
 ) -> anyhow::Result<(Level, usize)> {
     use rayon::prelude::*;
     let (clustered, auto) = prepare(scene, smallest_hole, false, quiet)?;
-    let (eye, viewcells) = walkable_viewcells(&auto, eye_height)?;
+    let (eye, viewcells) = walkable_viewcells(&auto, standing)?;
     if viewcells.is_empty() && !quiet {
         eprintln!("warning: no walkable floor (no upward surface with room for the eye at {eye}): every cell is free space");
     }
@@ -111,12 +205,12 @@ pub fn encode_volumetric(
 pub fn build_volumetric(
     scene: &SceneArg,
     smallest_hole: Option<f64>,
-    eye_height: Option<f64>,
+    standing: &Standing,
     out: &Path,
     quiet: bool,
 ) -> anyhow::Result<()> {
     let t = Instant::now();
-    let (level, viewcells) = encode_volumetric(scene, smallest_hole, eye_height, quiet)?;
+    let (level, viewcells) = encode_volumetric(scene, smallest_hole, standing, quiet)?;
     sightline_pvs::build::write_atomic(out, &level.bytes)
         .with_context(|| format!("cannot write {}", out.display()))?;
     if !quiet {
@@ -142,7 +236,7 @@ pub fn build_volumetric(
 pub fn check_volumetric(
     scene: &SceneArg,
     smallest_hole: Option<f64>,
-    eye_height: Option<f64>,
+    standing: &Standing,
     k: usize,
     json: bool,
     quiet: bool,
@@ -150,7 +244,7 @@ pub fn check_volumetric(
     use rayon::prelude::*;
     let t = Instant::now();
     let (clustered, auto) = prepare(scene, smallest_hole, false, quiet)?;
-    let (eye, viewcells) = walkable_viewcells(&auto, eye_height)?;
+    let (eye, viewcells) = walkable_viewcells(&auto, standing)?;
     anyhow::ensure!(
         !viewcells.is_empty(),
         "no walkable floor in {} (no upward surface with room for the eye at {eye})",
