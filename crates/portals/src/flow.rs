@@ -34,8 +34,9 @@
 //! liquid surface), and the separating planes of `p` and `q` leave some of it.
 
 use crate::bits::Bits;
-use crate::winding::{Plane, Winding, ON_EPSILON};
+use crate::winding::{clip_in_place, clip_into, Plane, Winding, ON_EPSILON};
 use rayon::prelude::*;
+use sightline_geom::DVec3;
 
 /// Tolerance of the cheap front/back tests of the base flood: a portal counts as in
 /// front if some point is more than this in front (a hair, not vis's 0.1).
@@ -243,17 +244,37 @@ pub fn might_see(g: &Graph, p: usize) -> Seen {
 }
 
 /// One step of a portal sequence: the source portal as clipped so far, the last
-/// portal passed (clipped), its plane, and the cells and portals still reachable.
-struct Frame<'a> {
-    source: Winding,
-    pass: Option<Winding>,
+/// portal passed (clipped; empty at the head), its plane, and the cells and portals
+/// still reachable. Frames are reused from one sequence to the next, so the flow
+/// allocates nothing once its deepest sequence has been reached.
+struct Frame {
+    source: Vec<DVec3>,
+    pass: Vec<DVec3>,
     plane: Plane,
-    cells: std::borrow::Cow<'a, Bits>,
-    portals: std::borrow::Cow<'a, Bits>,
+    cells: Vec<u64>,
+    portals: Vec<u64>,
+    /// The separating planes of `source` and `pass` (both ways), built on first use.
+    seps: Vec<Plane>,
+    seps_built: bool,
 }
 
-fn and(a: &Bits, b: &Bits) -> Bits {
-    Bits(a.0.iter().zip(&b.0).map(|(x, y)| x & y).collect())
+impl Frame {
+    fn new() -> Frame {
+        Frame {
+            source: Vec::new(),
+            pass: Vec::new(),
+            plane: Plane::new(DVec3::ZERO, 0.0),
+            cells: Vec::new(),
+            portals: Vec::new(),
+            seps: Vec::new(),
+            seps_built: false,
+        }
+    }
+}
+
+#[inline]
+fn bit(words: &[u64], i: usize) -> bool {
+    words[i >> 6] & (1 << (i & 63)) != 0
 }
 
 /// What directed portal `p` sees by flow (within `mightsee[p]`); `done[q]`, when
@@ -285,15 +306,15 @@ pub fn flow_within(
         },
         on_stack: Bits::new(cells),
         steps_left: budget.unwrap_or(usize::MAX),
+        frames: Vec::new(),
+        scratch: Vec::new(),
     };
-    let head = Frame {
-        source: base.winding.clone(),
-        pass: None,
-        plane: base.plane,
-        cells: std::borrow::Cow::Borrowed(&mightsee[p].cells),
-        portals: std::borrow::Cow::Borrowed(&mightsee[p].portals),
-    };
-    st.recurse(base.to, &head);
+    let mut head = Frame::new();
+    head.source.extend_from_slice(&base.winding.points);
+    head.plane = base.plane;
+    head.cells.extend_from_slice(&mightsee[p].cells.0);
+    head.portals.extend_from_slice(&mightsee[p].portals.0);
+    st.recurse(base.to, &mut head);
     (st.steps_left > 0).then_some(st.vis)
 }
 
@@ -307,21 +328,21 @@ struct State<'a> {
     on_stack: Bits,
     /// Cells the flow may still enter; at 0 it stops (and the caller falls back).
     steps_left: usize,
+    /// Spare frames, reused as a stack by the recursion.
+    frames: Vec<Frame>,
+    /// Scratch space of in-place clipping.
+    scratch: Vec<DVec3>,
 }
 
 impl State<'_> {
-    fn recurse(&mut self, leaf: u32, prev: &Frame) {
+    fn recurse(&mut self, leaf: u32, prev: &mut Frame) {
         if self.steps_left == 0 {
             return;
         }
         self.steps_left -= 1;
         self.vis.cells.set(leaf as usize);
         self.on_stack.set(leaf as usize);
-        // The separating planes of this frame's source and pass, built once for all
-        // the cell's portals (vis caches them the same way). They come from the source
-        // before it is clipped behind the next portal: a larger source, so planes that
-        // separate it from the pass separate every part of it too.
-        let mut seps: Option<Vec<Plane>> = None;
+        let mut next = self.frames.pop().unwrap_or_else(Frame::new);
         let g = self.g;
         for &q in &g.leaf_portals[leaf as usize] {
             if self.steps_left == 0 {
@@ -329,81 +350,110 @@ impl State<'_> {
             }
             let q = q as usize;
             let tp = &g.portals[q];
-            if !prev.portals.get(q) || self.on_stack.get(tp.to as usize) {
+            if !bit(&prev.portals, q) || self.on_stack.get(tp.to as usize) {
                 continue;
             }
             let test = self.done[q].as_ref().unwrap_or(&self.mightsee[q]);
-            // Nothing behind this portal that is not seen already: skip it (vis), and
-            // count every portal behind it as crossed (the flow's portal set bounds
-            // later flows through this portal, so it must stay a superset).
-            let more = prev
-                .cells
-                .0
-                .iter()
-                .zip(&test.cells.0)
-                .zip(&self.vis.cells.0)
-                .any(|((a, b), v)| a & b & !v != 0);
-            if !more {
+            // What might be seen behind this portal; if none of it is new, skip the
+            // portal (vis), and count every portal behind it as crossed (the flow's
+            // portal set bounds later flows through this portal, so it must stay a
+            // superset).
+            next.cells.clear();
+            let mut more = 0;
+            for ((a, b), v) in prev.cells.iter().zip(&test.cells.0).zip(&self.vis.cells.0) {
+                let m = a & b;
+                more |= m & !v;
+                next.cells.push(m);
+            }
+            if more == 0 {
                 self.vis.portals.set(q);
                 for ((v, a), b) in self
                     .vis
                     .portals
                     .0
                     .iter_mut()
-                    .zip(&prev.portals.0)
+                    .zip(&prev.portals)
                     .zip(&test.portals.0)
                 {
                     *v |= a & b;
                 }
                 continue;
             }
-            // The next portal in front of the source portal.
-            let Some(mut pass) = tp.winding.clip(&self.base.plane, ON_EPSILON) else {
+            if !self.clip_pass_and_source(tp, prev, &mut next) {
                 continue;
-            };
-            let mut source = prev.source.clone();
-            if let Some(prev_pass) = &prev.pass {
-                // In front of the previous portal.
-                let Some(w) = pass.clip(&prev.plane, ON_EPSILON) else {
-                    continue;
-                };
-                // The source behind the next portal.
-                let Some(src) = source.clip(&tp.plane.flipped(), ON_EPSILON) else {
-                    continue;
-                };
-                let seps = seps.get_or_insert_with(|| {
-                    let mut v = separators(&prev.source, prev_pass, false);
-                    v.extend(separators(prev_pass, &prev.source, true));
-                    v
-                });
-                let mut w = Some(w);
-                for plane in seps.iter() {
-                    w = w.and_then(|w| w.clip(plane, ON_EPSILON));
-                }
-                let Some(w) = w else {
-                    continue;
-                };
-                pass = w;
-                // The same backwards: lines from the new pass through the previous one
-                // reach only part of the source (vis's tests 2 and 3).
-                let Some(src) = clip_to_separators(&pass, prev_pass, src, false)
-                    .and_then(|s| clip_to_separators(prev_pass, &pass, s, true))
-                else {
-                    continue;
-                };
-                source = src;
             }
             self.vis.portals.set(q);
-            let frame = Frame {
-                source,
-                pass: Some(pass),
-                plane: tp.plane,
-                cells: std::borrow::Cow::Owned(and(&prev.cells, &test.cells)),
-                portals: std::borrow::Cow::Owned(and(&prev.portals, &test.portals)),
-            };
-            self.recurse(tp.to, &frame);
+            next.plane = tp.plane;
+            next.portals.clear();
+            next.portals
+                .extend(prev.portals.iter().zip(&test.portals.0).map(|(a, b)| a & b));
+            next.seps_built = false;
+            self.recurse(tp.to, &mut next);
         }
+        self.frames.push(next);
         self.on_stack.0[leaf as usize >> 6] &= !(1u64 << (leaf & 63));
+    }
+
+    /// `next.pass` = portal `tp` as lines through the sequence so far can reach it, and
+    /// `next.source` = the part of the source they leave from; `false` when either is
+    /// empty.
+    fn clip_pass_and_source(&mut self, tp: &DirPortal, prev: &mut Frame, next: &mut Frame) -> bool {
+        let tmp = &mut self.scratch;
+        // The next portal in front of the source portal.
+        if !clip_into(
+            &tp.winding.points,
+            &self.base.plane,
+            ON_EPSILON,
+            &mut next.pass,
+        ) {
+            return false;
+        }
+        next.source.clear();
+        if prev.pass.is_empty() {
+            next.source.extend_from_slice(&prev.source);
+            return true;
+        }
+        // In front of the previous portal; the source behind the next one.
+        if !clip_in_place(&mut next.pass, tmp, &prev.plane, ON_EPSILON)
+            || !clip_into(
+                &prev.source,
+                &tp.plane.flipped(),
+                ON_EPSILON,
+                &mut next.source,
+            )
+        {
+            return false;
+        }
+        // The separating planes of this frame's source and pass, built once for all
+        // the cell's portals (vis caches them the same way). They come from the source
+        // before it is clipped behind the next portal: a larger source, so planes that
+        // separate it from the pass separate every part of it too.
+        if !prev.seps_built {
+            prev.seps.clear();
+            let seps = &mut prev.seps;
+            for_each_separator(&prev.source, &prev.pass, false, |p| {
+                seps.push(p);
+                true
+            });
+            for_each_separator(&prev.pass, &prev.source, true, |p| {
+                seps.push(p);
+                true
+            });
+            prev.seps_built = true;
+        }
+        for plane in &prev.seps {
+            if !clip_in_place(&mut next.pass, tmp, plane, ON_EPSILON) {
+                return false;
+            }
+        }
+        // The same backwards: lines from the new pass through the previous one reach
+        // only part of the source (vis's tests 2 and 3).
+        let source = &mut next.source;
+        for_each_separator(&next.pass, &prev.pass, false, |plane| {
+            clip_in_place(source, tmp, &plane, ON_EPSILON)
+        }) && for_each_separator(&prev.pass, &next.pass, true, |plane| {
+            clip_in_place(source, tmp, &plane, ON_EPSILON)
+        })
     }
 }
 
@@ -414,7 +464,7 @@ impl State<'_> {
 /// front part.
 pub fn separators(source: &Winding, pass: &Winding, flip: bool) -> Vec<Plane> {
     let mut out = Vec::new();
-    for_each_separator(source, pass, flip, |p| {
+    for_each_separator(&source.points, &pass.points, flip, |p| {
         out.push(p);
         true
     });
@@ -426,28 +476,28 @@ pub fn separators(source: &Winding, pass: &Winding, flip: bool) -> Vec<Plane> {
 /// through an edge of `source` has all of `pass` in front only through the vertex
 /// of `pass` furthest from it, so each edge gives at most one plane (as in vis).
 fn for_each_separator(
-    source: &Winding,
-    pass: &Winding,
+    source: &[DVec3],
+    pass: &[DVec3],
     flip: bool,
     mut f: impl FnMut(Plane) -> bool,
 ) -> bool {
-    let (ns, np) = (source.points.len(), pass.points.len());
+    let (ns, np) = (source.len(), pass.len());
     for i in 0..ns {
         let l = (i + 1) % ns;
-        let v1 = source.points[l] - source.points[i];
+        let v1 = source[l] - source[i];
         for j in 0..np {
-            let v2 = pass.points[j] - source.points[i];
+            let v2 = pass[j] - source[i];
             let normal = v1.cross(v2);
             let len = normal.length();
             if len < ON_EPSILON {
                 continue;
             }
             let normal = normal / len;
-            let mut plane = Plane::new(normal, normal.dot(pass.points[j]));
+            let mut plane = Plane::new(normal, normal.dot(pass[j]));
             // Which side holds the source (a convex polygon lies on one side of a plane
             // through one of its edges; the first point off the plane tells which).
             let mut side = 0.0;
-            for (k, sp) in source.points.iter().enumerate() {
+            for (k, sp) in source.iter().enumerate() {
                 if k == i || k == l {
                     continue;
                 }
@@ -467,7 +517,7 @@ fn for_each_separator(
             // hair, so that it truly separates) and some of it clearly in front.
             let mut clear = false;
             let mut separates = true;
-            for (k, pp) in pass.points.iter().enumerate() {
+            for (k, pp) in pass.iter().enumerate() {
                 if k == j {
                     continue;
                 }
@@ -499,7 +549,7 @@ pub fn clip_to_separators(
     flip: bool,
 ) -> Option<Winding> {
     let mut t = Some(target);
-    for_each_separator(source, pass, flip, |plane| {
+    for_each_separator(&source.points, &pass.points, flip, |plane| {
         t = t.as_ref().and_then(|w| w.clip(&plane, ON_EPSILON));
         t.is_some()
     });

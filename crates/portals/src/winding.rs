@@ -100,45 +100,8 @@ impl Winding {
     /// with no point more than `eps` behind is returned whole, one lying in the plane
     /// included: ties are kept.
     pub fn clip(&self, plane: &Plane, eps: f64) -> Option<Winding> {
-        let n = self.points.len();
-        let mut buf = [0.0f64; 64];
-        let mut heap = Vec::new();
-        let d: &mut [f64] = if n <= buf.len() {
-            &mut buf[..n]
-        } else {
-            heap.resize(n, 0.0);
-            &mut heap
-        };
-        let (mut any_out, mut any_in) = (false, false);
-        for (di, p) in d.iter_mut().zip(&self.points) {
-            *di = plane.distance(*p);
-            any_out |= *di < -eps;
-            any_in |= *di > TOUCH_EPSILON;
-        }
-        if !any_out {
-            return Some(self.clone());
-        }
-        if !any_in {
-            return None;
-        }
-        let mut out = Vec::with_capacity(n + 2);
-        for i in 0..n {
-            let (p, dp) = (self.points[i], d[i]);
-            if dp >= -eps {
-                out.push(p);
-            }
-            let j = if i + 1 == n { 0 } else { i + 1 };
-            let dq = d[j];
-            // The edge crosses the kept boundary `d = -eps`.
-            if (dp >= -eps) != (dq >= -eps) {
-                let t = (dp + eps) / (dp - dq);
-                out.push(p + (self.points[j] - p) * t);
-            }
-        }
-        if out.len() < 3 {
-            return None;
-        }
-        Some(Winding::new(out))
+        let mut out = Vec::new();
+        clip_into(&self.points, plane, eps, &mut out).then(|| Winding::new(out))
     }
 
     /// Both parts of the winding (front, back), cut exactly at `plane` as qbsp's
@@ -209,6 +172,56 @@ impl Winding {
     pub fn any_back(&self, plane: &Plane, eps: f64) -> bool {
         self.points.iter().any(|p| plane.distance(*p) < -eps)
     }
+}
+
+/// [`Winding::clip`] on the points `w`, written into `out` (cleared first) without
+/// allocating once `out` has grown: whether anything is left.
+pub fn clip_into(w: &[DVec3], plane: &Plane, eps: f64, out: &mut Vec<DVec3>) -> bool {
+    out.clear();
+    let n = w.len();
+    let mut buf = [0.0f64; 64];
+    let mut heap = Vec::new();
+    let d: &mut [f64] = if n <= buf.len() {
+        &mut buf[..n]
+    } else {
+        heap.resize(n, 0.0);
+        &mut heap
+    };
+    let (mut any_out, mut any_in) = (false, false);
+    for (di, p) in d.iter_mut().zip(w) {
+        *di = plane.distance(*p);
+        any_out |= *di < -eps;
+        any_in |= *di > TOUCH_EPSILON;
+    }
+    if !any_out {
+        out.extend_from_slice(w);
+        return true;
+    }
+    if !any_in {
+        return false;
+    }
+    for i in 0..n {
+        let (p, dp) = (w[i], d[i]);
+        if dp >= -eps {
+            out.push(p);
+        }
+        let j = if i + 1 == n { 0 } else { i + 1 };
+        let dq = d[j];
+        // The edge crosses the kept boundary `d = -eps`.
+        if (dp >= -eps) != (dq >= -eps) {
+            let t = (dp + eps) / (dp - dq);
+            out.push(p + (w[j] - p) * t);
+        }
+    }
+    out.len() >= 3
+}
+
+/// [`clip_into`] in place: `w` becomes its part in front of `plane` (`tmp` is scratch
+/// space); whether anything is left (when not, `w` is left unspecified).
+pub fn clip_in_place(w: &mut Vec<DVec3>, tmp: &mut Vec<DVec3>, plane: &Plane, eps: f64) -> bool {
+    let kept = clip_into(w, plane, eps, tmp);
+    std::mem::swap(w, tmp);
+    kept
 }
 
 #[cfg(test)]
