@@ -114,8 +114,8 @@ pub fn might_see_all(g: &Graph) -> Vec<Seen> {
 }
 
 /// The flow of every directed portal (`Mode::Full`), portals with the smallest floods
-/// first, in waves: a finished portal's flow bounds what later flows can see behind it
-/// (vis's `stat_done`).
+/// first: a finished portal's flow bounds what later flows can see behind it (vis's
+/// `stat_done`).
 pub fn flow_all(g: &Graph, mightsee: &[Seen]) -> Vec<Seen> {
     flow_all_within(g, mightsee, None)
 }
@@ -133,9 +133,16 @@ pub fn flow_all_within(g: &Graph, mightsee: &[Seen], budget: Option<usize>) -> V
     }
 }
 
-/// The waves of [`flow_all`]: directed portals by increasing flood size (ties by index),
-/// in chunks; each wave's flows see the results of the waves before it only, so the
-/// answer does not depend on how many threads run a wave.
+/// How far behind its own place in the order (see [`flow_waves`]) a flow takes the
+/// results of other flows: the flow at place `i` is bounded by the flows at places
+/// `< i - FLOW_WINDOW` and by the floods of the others. A fixed rule, so the answer
+/// does not depend on the number of threads; the window lets the threads run ahead
+/// of a long flow instead of waiting for it at a barrier.
+pub const FLOW_WINDOW: usize = 32;
+
+/// The order of [`flow_all`], in waves: directed portals by increasing flood size (ties
+/// by index), in chunks of `max(64, n / 256)`. The waves are the unit of resuming:
+/// [`flow_all_resumable`] reports each wave when it and every wave before it are done.
 pub fn flow_waves(g: &Graph, mightsee: &[Seen]) -> Vec<Vec<usize>> {
     let n = g.portals.len();
     let mut order: Vec<usize> = (0..n).collect();
@@ -148,9 +155,13 @@ pub fn flow_waves(g: &Graph, mightsee: &[Seen]) -> Vec<Vec<usize>> {
 /// directed portal). The leading waves (see [`flow_waves`]) whose portals are all in
 /// `done` are taken as they are; from the first incomplete wave on, everything is
 /// recomputed (a partial wave is ignored), so a resumed run gives exactly the result
-/// of an uninterrupted one. `on_wave(wave_index, results)` is called after each wave
-/// computed here, with the wave's `(portal, result)` pairs; an error from it stops the
-/// run and is returned.
+/// of an uninterrupted one. `on_wave(wave_index, results)` is called, in wave order,
+/// once a wave and all before it are done, with the wave's `(portal, result)` pairs;
+/// an error from it stops the run and is returned.
+///
+/// The flows run on as many threads as rayon's current pool has, each taking the next
+/// portal in the order; the flow at place `i` waits until every flow before
+/// `i - FLOW_WINDOW` is done (it uses their results and no others).
 pub fn flow_all_resumable<E>(
     g: &Graph,
     mightsee: &[Seen],
@@ -158,38 +169,137 @@ pub fn flow_all_resumable<E>(
     mut done: Vec<Option<Seen>>,
     mut on_wave: impl FnMut(usize, &[(usize, &Seen)]) -> Result<(), E>,
 ) -> Result<Vec<Seen>, E> {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::{Condvar, Mutex, OnceLock};
+
     let n = g.portals.len();
     done.resize(n, None);
     let waves = flow_waves(g, mightsee);
+    let order: Vec<usize> = waves.concat();
+    let mut place = vec![0; n];
+    for (i, &p) in order.iter().enumerate() {
+        place[p] = i;
+    }
     let resumed = waves
         .iter()
         .take_while(|w| w.iter().all(|&p| done[p].is_some()))
         .count();
-    for w in &waves[resumed..] {
-        for &p in w {
-            done[p] = None;
-        }
-    }
-    for (k, chunk) in waves.iter().enumerate().skip(resumed) {
-        let results: Vec<Seen> = chunk
-            .par_iter()
-            .map(|&p| {
-                flow_within(g, p, mightsee, &done, budget).unwrap_or_else(|| mightsee[p].clone())
-            })
-            .collect();
-        for (&p, r) in chunk.iter().zip(results) {
-            done[p] = Some(r);
-        }
-        let pairs: Vec<(usize, &Seen)> = chunk
-            .iter()
-            .filter_map(|&p| done[p].as_ref().map(|s| (p, s)))
-            .collect();
-        on_wave(k, &pairs)?;
-    }
-    Ok(done
+    let start: usize = waves[..resumed].iter().map(Vec::len).sum();
+    let results: Vec<OnceLock<Seen>> = done
         .into_iter()
         .enumerate()
-        .map(|(p, d)| d.unwrap_or_else(|| mightsee[p].clone()))
+        .map(|(p, d)| {
+            let cell = OnceLock::new();
+            if place[p] < start {
+                if let Some(s) = d {
+                    let _ = cell.set(s);
+                }
+            }
+            cell
+        })
+        .collect();
+
+    /// Places finished, and how many leading places are all finished.
+    struct Progress {
+        finished: Vec<bool>,
+        prefix: usize,
+        stop: bool,
+    }
+    let progress = Mutex::new(Progress {
+        finished: (0..n).map(|i| i < start).collect(),
+        prefix: start,
+        stop: false,
+    });
+    let changed = Condvar::new();
+    let next = AtomicUsize::new(start);
+    let lock = || progress.lock().unwrap_or_else(|e| e.into_inner());
+
+    // A worker that panics stops the others and the reporting (the scope then
+    // re-raises its panic) instead of leaving them waiting for its place.
+    struct StopOnPanic<'a>(&'a Mutex<Progress>, &'a Condvar);
+    impl Drop for StopOnPanic<'_> {
+        fn drop(&mut self) {
+            if std::thread::panicking() {
+                self.0.lock().unwrap_or_else(|e| e.into_inner()).stop = true;
+                self.1.notify_all();
+            }
+        }
+    }
+    let worker_loop = || loop {
+        let i = next.fetch_add(1, Ordering::Relaxed);
+        if i >= n {
+            return;
+        }
+        let limit = i.saturating_sub(FLOW_WINDOW);
+        {
+            let mut pr = lock();
+            while pr.prefix < limit && !pr.stop {
+                pr = changed.wait(pr).unwrap_or_else(|e| e.into_inner());
+            }
+            if pr.stop {
+                return;
+            }
+        }
+        let p = order[i];
+        let known = |q: usize| {
+            if place[q] < limit {
+                results[q].get()
+            } else {
+                None
+            }
+        };
+        let r = flow_known(g, p, mightsee, known, budget).unwrap_or_else(|| mightsee[p].clone());
+        let _ = results[p].set(r);
+        let mut pr = lock();
+        pr.finished[i] = true;
+        while pr.prefix < n && pr.finished[pr.prefix] {
+            pr.prefix += 1;
+        }
+        changed.notify_all();
+    };
+
+    let worker = || {
+        let _guard = StopOnPanic(&progress, &changed);
+        worker_loop()
+    };
+
+    let threads = rayon::current_num_threads().max(1);
+    let mut failed = None;
+    std::thread::scope(|s| {
+        for _ in 0..threads {
+            s.spawn(worker);
+        }
+        // Report the waves in order as the finished prefix passes their ends.
+        let mut end = start;
+        for (k, wave) in waves.iter().enumerate().skip(resumed) {
+            end += wave.len();
+            let mut pr = lock();
+            while pr.prefix < end && !pr.stop {
+                pr = changed.wait(pr).unwrap_or_else(|e| e.into_inner());
+            }
+            if pr.stop {
+                break;
+            }
+            drop(pr);
+            let pairs: Vec<(usize, &Seen)> = wave
+                .iter()
+                .filter_map(|&p| results[p].get().map(|r| (p, r)))
+                .collect();
+            if let Err(e) = on_wave(k, &pairs) {
+                failed = Some(e);
+                lock().stop = true;
+                changed.notify_all();
+                break;
+            }
+        }
+    });
+    if let Some(e) = failed {
+        return Err(e);
+    }
+    Ok(results
+        .into_iter()
+        .enumerate()
+        .map(|(p, r)| r.into_inner().unwrap_or_else(|| mightsee[p].clone()))
         .collect())
 }
 
@@ -293,13 +403,24 @@ pub fn flow_within(
     done: &[Option<Seen>],
     budget: Option<usize>,
 ) -> Option<Seen> {
+    flow_known(g, p, mightsee, |q| done[q].as_ref(), budget)
+}
+
+/// [`flow_within`] with the finished flows given by `known(q)`.
+fn flow_known<'a>(
+    g: &'a Graph,
+    p: usize,
+    mightsee: &'a [Seen],
+    known: impl Fn(usize) -> Option<&'a Seen>,
+    budget: Option<usize>,
+) -> Option<Seen> {
     let base = &g.portals[p];
     let cells = g.leaf_portals.len();
     let mut st = State {
         g,
         base,
         mightsee,
-        done,
+        known,
         vis: Seen {
             cells: Bits::new(cells),
             portals: Bits::new(g.portals.len()),
@@ -318,11 +439,12 @@ pub fn flow_within(
     (st.steps_left > 0).then_some(st.vis)
 }
 
-struct State<'a> {
+struct State<'a, K> {
     g: &'a Graph,
     base: &'a DirPortal,
     mightsee: &'a [Seen],
-    done: &'a [Option<Seen>],
+    /// The flow of portal `q` when it is finished and may be used.
+    known: K,
     vis: Seen,
     /// The cells of the current sequence: a line never enters a cell twice.
     on_stack: Bits,
@@ -334,7 +456,7 @@ struct State<'a> {
     scratch: Vec<DVec3>,
 }
 
-impl State<'_> {
+impl<'a, K: Fn(usize) -> Option<&'a Seen>> State<'a, K> {
     fn recurse(&mut self, leaf: u32, prev: &mut Frame) {
         if self.steps_left == 0 {
             return;
@@ -353,7 +475,7 @@ impl State<'_> {
             if !bit(&prev.portals, q) || self.on_stack.get(tp.to as usize) {
                 continue;
             }
-            let test = self.done[q].as_ref().unwrap_or(&self.mightsee[q]);
+            let test = (self.known)(q).unwrap_or(&self.mightsee[q]);
             // What might be seen behind this portal; if none of it is new, skip the
             // portal (vis), and count every portal behind it as crossed (the flow's
             // portal set bounds later flows through this portal, so it must stay a
