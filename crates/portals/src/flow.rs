@@ -597,7 +597,96 @@ pub fn separators(source: &Winding, pass: &Winding, flip: bool) -> Vec<Plane> {
 /// until it returns `false`; returns whether every call returned `true`. A plane
 /// through an edge of `source` has all of `pass` in front only through the vertex
 /// of `pass` furthest from it, so each edge gives at most one plane (as in vis).
+///
+/// Which side of such a plane holds `source` follows from which side of `source`'s own
+/// plane the vertex of `pass` lies on (vis's test): with `N` the normal about which
+/// `source` turns counter-clockwise, the plane through edge `e` and vertex `v` has
+/// normal `e × (v − s)`, and `source` lies to the left of `e`, along `N × e`, whose dot
+/// product with that normal is `−|e|² N · (v − s)`. A vertex within `ON_EPSILON` of the
+/// source's plane gives no plane (vis skips it too): a skipped plane clips nothing.
 fn for_each_separator(
+    source: &[DVec3],
+    pass: &[DVec3],
+    flip: bool,
+    mut f: impl FnMut(Plane) -> bool,
+) -> bool {
+    let (ns, np) = (source.len(), pass.len());
+    if ns < 3 {
+        return true;
+    }
+    // Newell's normal: points along N for a counter-clockwise source.
+    let mut turn = DVec3::ZERO;
+    for k in 0..ns {
+        turn += (source[k] - source[0]).cross(source[(k + 1) % ns] - source[0]);
+    }
+    let turn_len = turn.length();
+    if turn_len < ON_EPSILON {
+        return for_each_separator_scanning(source, pass, flip, f);
+    }
+    let turn = turn / turn_len;
+    let mut buf = [0.0f64; 16];
+    let mut heap = Vec::new();
+    let height: &mut [f64] = if np <= buf.len() {
+        &mut buf[..np]
+    } else {
+        heap.resize(np, 0.0);
+        &mut heap
+    };
+    for (h, p) in height.iter_mut().zip(pass) {
+        *h = turn.dot(*p - source[0]);
+    }
+    for i in 0..ns {
+        let l = (i + 1) % ns;
+        let v1 = source[l] - source[i];
+        for j in 0..np {
+            if height[j].abs() <= ON_EPSILON {
+                continue; // in the source's plane
+            }
+            let v2 = pass[j] - source[i];
+            let normal = v1.cross(v2);
+            let len = normal.length();
+            if len < ON_EPSILON {
+                continue;
+            }
+            let normal = normal / len;
+            let mut plane = Plane::new(normal, normal.dot(pass[j]));
+            // The source lies in front when the vertex lies behind its plane.
+            if height[j] < 0.0 {
+                plane = plane.flipped();
+            }
+            if !separates(&plane, pass, j) {
+                continue;
+            }
+            if !f(if flip { plane.flipped() } else { plane }) {
+                return false;
+            }
+            break;
+        }
+    }
+    true
+}
+
+/// Whether `plane` (through `pass[j]`) has all of `pass` in front (ties allowed only to
+/// a hair, so that it truly separates) and some of it clearly in front.
+#[inline]
+fn separates(plane: &Plane, pass: &[DVec3], j: usize) -> bool {
+    let mut clear = false;
+    for (k, pp) in pass.iter().enumerate() {
+        if k == j {
+            continue;
+        }
+        let d = plane.distance(*pp);
+        if d < -FLOOD_EPSILON {
+            return false;
+        }
+        clear |= d > ON_EPSILON;
+    }
+    clear
+}
+
+/// [`for_each_separator`] for a source without a plane of its own (degenerate): the
+/// side of each candidate plane holding the source is found from the source's points.
+fn for_each_separator_scanning(
     source: &[DVec3],
     pass: &[DVec3],
     flip: bool,
@@ -635,22 +724,7 @@ fn for_each_separator(
             if side > 0.0 {
                 plane = plane.flipped();
             }
-            // A separating plane has the whole pass in front (ties allowed only to a
-            // hair, so that it truly separates) and some of it clearly in front.
-            let mut clear = false;
-            let mut separates = true;
-            for (k, pp) in pass.iter().enumerate() {
-                if k == j {
-                    continue;
-                }
-                let d = plane.distance(*pp);
-                if d < -FLOOD_EPSILON {
-                    separates = false;
-                    break;
-                }
-                clear |= d > ON_EPSILON;
-            }
-            if !separates || !clear {
+            if !separates(&plane, pass, j) {
                 continue;
             }
             if !f(if flip { plane.flipped() } else { plane }) {
@@ -764,5 +838,84 @@ mod tests {
             assert!(s.cells == exact[p].cells || s.cells == mightsee[p].cells);
         }
         assert!(looser, "some flow needs more than one step and falls back");
+    }
+
+    /// The side of a separating plane that holds the source, read from the source's own
+    /// plane, is the side its points lie on: same planes as scanning the points, on
+    /// random convex pairs (either turning sense) whose pass vertices lie off the
+    /// source's plane.
+    #[test]
+    fn separators_from_the_source_plane_match_scanning_the_source() {
+        let mut seed = 7u64;
+        let mut rnd = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let polygon = |n: usize, c: DVec3, u: DVec3, v: DVec3, r: f64, reverse: bool| {
+            let mut pts: Vec<DVec3> = (0..n)
+                .map(|k| {
+                    let a = k as f64 * std::f64::consts::TAU / n as f64;
+                    c + (u * a.cos() + v * a.sin()) * r
+                })
+                .collect();
+            if reverse {
+                pts.reverse();
+            }
+            pts
+        };
+        let mut compared = 0;
+        for _ in 0..2000 {
+            let dir = |r: &mut dyn FnMut() -> f64| {
+                DVec3::new(r() - 0.5, r() - 0.5, r() - 0.5).normalize()
+            };
+            let n1 = dir(&mut rnd);
+            let u1 = n1.any_orthonormal_vector();
+            let v1 = n1.cross(u1);
+            let source = polygon(
+                3 + (rnd() * 5.0) as usize,
+                DVec3::ZERO,
+                u1,
+                v1,
+                1.0 + 50.0 * rnd(),
+                rnd() < 0.5,
+            );
+            let n2 = dir(&mut rnd);
+            let u2 = n2.any_orthonormal_vector();
+            let v2 = n2.cross(u2);
+            let centre = n1 * (5.0 + 100.0 * rnd()) + dir(&mut rnd) * 60.0 * rnd();
+            let pass = polygon(
+                3 + (rnd() * 5.0) as usize,
+                centre,
+                u2,
+                v2,
+                1.0 + 50.0 * rnd(),
+                rnd() < 0.5,
+            );
+            if pass.iter().any(|p| n1.dot(*p).abs() <= 1.0) {
+                continue;
+            }
+            for flip in [false, true] {
+                let mut a = Vec::new();
+                for_each_separator(&source, &pass, flip, |p| {
+                    a.push(p);
+                    true
+                });
+                let mut b = Vec::new();
+                for_each_separator_scanning(&source, &pass, flip, |p| {
+                    b.push(p);
+                    true
+                });
+                assert_eq!(a.len(), b.len(), "{source:?} {pass:?}");
+                for (x, y) in a.iter().zip(&b) {
+                    assert!(
+                        (x.normal - y.normal).length() < 1e-9 && (x.dist - y.dist).abs() < 1e-6
+                    );
+                }
+                compared += a.len();
+            }
+        }
+        assert!(compared > 1000, "{compared}");
     }
 }
