@@ -3,12 +3,13 @@
 # thread count, runs alternating. Per run: wall s, CPU (user+sys) s, peak RSS MB, and the
 # written rows' Σ against the shipped rows with oracle misses (the vis_rows example).
 #   scripts/vis_side_by_side.sh LEVEL_DIR PRT_DIR ERICW_VIS RUNS level...
-# Needs target/release/sightline and target/release/examples/vis_rows.
+# Needs target/release/sightline and target/release/examples/vis_rows (or the paths in
+# $SIGHTLINE and $VIS_ROWS, e.g. under $CARGO_TARGET_DIR).
 set -euo pipefail
 levels_dir=$1 prt_dir=$2 ericw=$3 runs=$4; shift 4
 here=$(cd "$(dirname "$0")/.." && pwd)
-sl=$here/target/release/sightline
-rows=$here/target/release/examples/vis_rows
+sl=${SIGHTLINE:-$here/target/release/sightline}
+rows=${VIS_ROWS:-$here/target/release/examples/vis_rows}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 echo "# $(date -u +%FT%TZ) $(nproc) cores; load before: $(cut -d' ' -f1-3 /proc/loadavg)"

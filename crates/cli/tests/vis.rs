@@ -57,7 +57,7 @@ fn vis_on_dm1_reads_back_as_an_engine_reads_it() {
     let dir = tempfile::tempdir().unwrap();
     let prt = data("dm1.prt");
     let mut outputs = Vec::new();
-    for threads in ["1", "2"] {
+    for threads in ["1", "2", "8"] {
         let sub = dir.path().join(format!("t{threads}"));
         std::fs::create_dir(&sub).unwrap();
         let level = copy_level(&sub, "dm1.bsp");
@@ -80,6 +80,7 @@ fn vis_on_dm1_reads_back_as_an_engine_reads_it() {
         outputs.push(std::fs::read(&level).unwrap());
     }
     assert!(outputs[0] == outputs[1], "1 and 2 threads differ");
+    assert!(outputs[0] == outputs[2], "1 and 8 threads differ");
     let original = std::fs::read(data("dm1.bsp")).unwrap();
     assert!(std::fs::read(dir.path().join("t1/dm1.bsp.orig")).unwrap() == original);
     let written = &outputs[0];

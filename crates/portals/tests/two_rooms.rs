@@ -1,6 +1,6 @@
 //! Hand-checked facts on the generated two-room level (see `testlevel::two_rooms`).
 
-use sightline_portals::testlevel::two_rooms;
+use sightline_portals::testlevel::{corner_rooms, two_rooms};
 use sightline_portals::{Mode, Portals};
 
 #[test]
@@ -61,4 +61,17 @@ fn the_wall_face_behind_the_viewer_is_culled() {
     assert!(!west.faces.contains(&2), "{:?}", west.faces);
     let fast = portals.solve(1, Mode::Fast);
     assert!(fast.faces.contains(&2));
+}
+
+#[test]
+fn rooms_meeting_along_an_edge_get_no_portal_and_do_not_see_each_other() {
+    // Lines from one room to the other pass only through the shared edge: they graze.
+    // A split that let pieces overlap gave these rooms a sliver portal.
+    let level = corner_rooms();
+    let portals = Portals::build(&level).unwrap();
+    assert!(portals.portals().is_empty(), "{:?}", portals.portals());
+    for mode in [Mode::Full, Mode::Fast] {
+        assert_eq!(portals.solve(1, mode).leaves, vec![1]);
+        assert_eq!(portals.solve(2, mode).leaves, vec![2]);
+    }
 }

@@ -8,13 +8,14 @@
 //!   everything is computed and re-read: a failure at any step leaves the level as it
 //!   was. The original is kept as `LEVEL.bsp.orig` (never overwritten: a second run
 //!   keeps the first original) unless `--in-place`.
-//! * **Resume.** The full flow runs in waves of directed portals
-//!   ([`sightline_portals::flow::flow_waves`]); after each wave its results are
-//!   appended to `LEVEL.vis-state` (with a fingerprint of the level's and the `.prt`'s
-//!   bytes, the mode and the tool's version, and a checksum per wave). A later run on
-//!   the same inputs takes the complete leading waves from it and computes the rest;
-//!   since a wave only sees the results of earlier waves, the output is byte-identical
-//!   to an uninterrupted run's, and to a run on any number of threads. The state file
+//! * **Resume.** The full flow runs its directed portals in a fixed order, cut into
+//!   waves ([`sightline_portals::flow::flow_waves`]); once a wave and all before it are
+//!   done its results are appended to `LEVEL.vis-state` (with a fingerprint of the
+//!   level's and the `.prt`'s bytes, the mode and the tool's version, and a checksum per
+//!   wave). A later run on the same inputs takes the complete leading waves from it and
+//!   computes the rest; since a flow only uses the results of flows a fixed distance
+//!   before it in the order ([`sightline_portals::flow::FLOW_WINDOW`]), the output is
+//!   byte-identical to an uninterrupted run's, and to a run on any number of threads. The state file
 //!   is removed once the level is written. `--fast` (well under a second) keeps no
 //!   state.
 
