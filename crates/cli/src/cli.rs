@@ -406,8 +406,9 @@ pub enum Command {
         #[arg(long, default_value_t = 100.0)]
         cell_size: f64,
         /// The method (listed below). A city: the on-line method of its grid cells
-        /// (default dual-ray). A level (.bsp, .obj, .gltf, .glb): the portal method its
-        /// PVS is built with in memory before serving (default portals-fast).
+        /// (default dual-ray). A level: the method its PVS is built with in memory
+        /// before serving (a .bsp: default portals-fast; a mesh level, .obj, .gltf,
+        /// .glb: default volumetric on its walkable viewcells, or portals/portals-fast).
         #[arg(long)]
         method: Option<String>,
         /// Eye height above the ground or floor, in scene units (default: 1.7 in a city;

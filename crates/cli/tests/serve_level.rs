@@ -167,41 +167,77 @@ fn serve_a_mesh_level_in_memory_and_from_its_pvs() {
     sightline_scene::export::write_obj(&two_rooms_and_a_door(0.0), &mut f).unwrap();
     let obj = obj.to_string_lossy().into_owned();
     let pvs = dir.path().join("rooms.pvs").to_string_lossy().into_owned();
-    let (code, _, err) = sightline(&[
-        "build",
-        &obj,
-        "--method",
-        "portals-fast",
-        "--smallest-hole",
-        "0.45",
-        "-o",
-        &pvs,
-        "--quiet",
-    ]);
-    assert_eq!(code, 0, "{err}");
-    let (code, q, err) = sightline(&["query", &pvs, "--at=-3,-2,1.5", "--json"]);
-    assert_eq!(code, 0, "{err}");
-    let q: serde_json::Value = serde_json::from_str(&q).unwrap();
+    let walk = dir.path().join("walk.pvs").to_string_lossy().into_owned();
+    for (method, out) in [("portals-fast", &pvs), ("volumetric", &walk)] {
+        let (code, _, err) = sightline(&[
+            "build",
+            &obj,
+            "--method",
+            method,
+            "--smallest-hole",
+            "0.45",
+            "-o",
+            out,
+            "--quiet",
+        ]);
+        assert_eq!(code, 0, "{err}");
+    }
     let clusters = sightline_pvs::PvsFile::open(&pvs)
         .unwrap()
         .header()
         .object_count;
-    for args in [
-        vec!["serve", &obj, "--smallest-hole", "0.45"],
-        vec!["serve", &obj, "--pvs", &pvs],
+    // No --method: a mesh level is served on its walkable viewcells, as `build` makes
+    // them; --method portals-fast and a --pvs file as asked.
+    for (args, method, file) in [
+        (
+            vec!["serve", &obj, "--smallest-hole", "0.45"],
+            "volumetric",
+            &walk,
+        ),
+        (vec!["serve", &obj, "--pvs", &walk], "volumetric", &walk),
+        (
+            vec![
+                "serve",
+                &obj,
+                "--smallest-hole",
+                "0.45",
+                "--method",
+                "portals-fast",
+            ],
+            "portals-fast",
+            &pvs,
+        ),
+        (vec!["serve", &obj, "--pvs", &pvs], "portals-fast", &pvs),
     ] {
+        let (code, q, err) = sightline(&["query", file, "--at=-3,-2,1.5", "--json"]);
+        assert_eq!(code, 0, "{err}");
+        let q: serde_json::Value = serde_json::from_str(&q).unwrap();
         let (_server, out) = serve(&args);
         let (line, addr) = out.split_once('|').unwrap();
-        assert!(line.contains("method portals-fast"), "{line}");
+        assert!(line.contains(&format!("method {method}")), "{line}");
         let (code, scene) = get(addr, "/api/scene");
         assert_eq!(code, 200);
         assert_eq!(scene["kind"], "level");
         assert_eq!(scene["layout"], "cells");
         // The clusters are the objects served.
         assert_eq!(scene["objects"], clusters, "{args:?}");
-        // Smallest hole 0.45: the eye at 1.7 (above 2.5 × 0.45).
+        // Smallest hole 0.45: the eye at 1.7 (above 2.5 × 0.45; the volumetric default
+        // is 1.7 as well).
         assert_eq!(scene["eye_height"], 1.7);
-        assert!(scene["start"].is_array());
+        let start = scene["start"].as_array().expect("a start point").clone();
+        if method == "volumetric" {
+            // The walk starts on a floor, the eye in a walkable viewcell.
+            let at = format!(
+                "--at={},{},{}",
+                start[0].as_f64().unwrap(),
+                start[1].as_f64().unwrap(),
+                start[2].as_f64().unwrap()
+            );
+            let (code, s, err) = sightline(&["query", file, &at, "--json"]);
+            assert_eq!(code, 0, "{err}");
+            let s: serde_json::Value = serde_json::from_str(&s).unwrap();
+            assert_eq!(s["free_space"], false, "{s}");
+        }
         let (code, v) = get(addr, "/api/pvs?at=-3,-2,1.5");
         assert_eq!(code, 200, "{v}");
         assert_eq!(v["visible"], q["visible"], "{args:?}");

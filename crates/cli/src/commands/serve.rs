@@ -63,13 +63,29 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
     let level_mode = match method.as_deref() {
         None => is_level,
         Some(m) => {
-            let portal = matches!(m.parse(), Ok(Method::Portals | Method::PortalsFast));
+            let portal = matches!(
+                m.parse(),
+                Ok(Method::Portals | Method::PortalsFast | Method::Volumetric)
+            );
             is_level && (portal || pvs.is_some())
         }
     };
     let served = if level_mode {
-        let method = method.as_deref().unwrap_or("portals-fast");
-        level::prepare(&scene_arg, pvs.as_deref(), method, smallest_hole, quiet)?
+        // A mesh level's default is its walkable viewcells (as `build`).
+        let default = if mesh::is_mesh(path) {
+            Method::Volumetric.name()
+        } else {
+            Method::PortalsFast.name()
+        };
+        let method = method.as_deref().unwrap_or(default);
+        level::prepare(
+            &scene_arg,
+            pvs.as_deref(),
+            method,
+            smallest_hole,
+            eye_height,
+            quiet,
+        )?
     } else {
         city(
             &scene_arg,

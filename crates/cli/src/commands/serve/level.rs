@@ -17,6 +17,7 @@ use super::Served;
 use crate::cli::SceneArg;
 use crate::commands::{bsp, mesh};
 use anyhow::{bail, Context};
+use sightline_core::Method;
 use sightline_geom::DVec3;
 use sightline_portals::Mode;
 use sightline_pvs::PvsFile;
@@ -38,12 +39,13 @@ pub(crate) fn prepare(
     pvs: Option<&Path>,
     method: &str,
     smallest_hole: Option<f64>,
+    eye_height: Option<f64>,
     quiet: bool,
 ) -> anyhow::Result<Served> {
     if bsp::is_bsp(&scene.scene) {
         bsp_level(&scene.scene, pvs, method)
     } else {
-        mesh_level(scene, pvs, method, smallest_hole, quiet)
+        mesh_level(scene, pvs, method, smallest_hole, eye_height, quiet)
     }
 }
 
@@ -103,6 +105,7 @@ fn mesh_level(
     pvs: Option<&Path>,
     method: &str,
     smallest_hole: Option<f64>,
+    eye_height: Option<f64>,
     quiet: bool,
 ) -> anyhow::Result<Served> {
     let path = &scene.scene;
@@ -113,9 +116,22 @@ fn mesh_level(
             let clustered = mesh::clustered_for(scene, &file)?;
             (file, clustered, None)
         }
+        None if method == Method::Volumetric.name() => {
+            let standing = mesh::Standing {
+                eye_height,
+                ..Default::default()
+            };
+            let (level, _) = mesh::encode_volumetric(scene, smallest_hole, &standing, quiet)?;
+            let n = level.bytes.len();
+            (
+                PvsFile::from_bytes(level.bytes)?,
+                level.clustered,
+                Some((Method::Volumetric.name(), n)),
+            )
+        }
         None => {
             let Some(full) = mesh::portal_mode(path, method) else {
-                bail!("a mesh level is served with its PVS built by portals or portals-fast (or --pvs L.pvs), not '{method}'");
+                bail!("a mesh level is served with its PVS built by volumetric, portals or portals-fast (or --pvs L.pvs), not '{method}'");
             };
             let level = mesh::encode(scene, full, smallest_hole, quiet)?;
             let n = level.bytes.len();
@@ -127,28 +143,43 @@ fn mesh_level(
             )
         }
     };
-    let hole = file
-        .header()
-        .params
-        .iter()
-        .find(|(k, _)| k == "smallest_hole")
-        .and_then(|(_, v)| v.parse::<f64>().ok())
-        .filter(|h| h.is_finite() && *h > 0.0);
+    let param = |name: &str| {
+        file.header()
+            .params
+            .iter()
+            .find(|(k, _)| k == name)
+            .and_then(|(_, v)| v.parse::<f64>().ok())
+            .filter(|x| x.is_finite() && *x > 0.0)
+    };
+    // A volumetric file's walkable viewcells come first: start on the largest one's
+    // floor, the eye at the file's eye height above it.
+    let walk_eye = param("eye_height");
+    let walkable = param("viewcells").map_or(0, |n| n as usize);
+    let hole = param("smallest_hole");
     let scene = Arc::new(clustered.scene);
     let src = source(file, &scene, pvs, built.is_some())?;
-    let start = largest_cell_centre(&src);
+    let start = match walk_eye.filter(|_| walkable > 0) {
+        Some(eye) => largest_floor_eye(&src, walkable, eye),
+        None => largest_cell_centre(&src),
+    };
     describe(
         path,
         pvs,
         &src,
-        "automatic cells",
+        if walkable > 0 {
+            "cells (walkable viewcells, then free space)"
+        } else {
+            "automatic cells"
+        },
         built.map(|(m, n)| (m, n, t.elapsed().as_secs_f64())),
     );
     Ok(Served {
         scene,
         view: ViewSettings {
             kind: "level",
-            eye_height: mesh_eye_height(hole),
+            eye_height: walk_eye
+                .filter(|_| walkable > 0)
+                .unwrap_or_else(|| mesh_eye_height(hole)),
             start: start.map(|p| p.to_array()),
         },
         source: Arc::new(src),
@@ -177,6 +208,21 @@ fn source(
 }
 
 /// The centre of the largest cell (by the volume of its box) whose centre is in it.
+/// The eye of a viewer standing in the middle of the largest of the first `walkable`
+/// cells (walkable viewcells, their boxes from the floor voxel up), `eye` above its
+/// floor, when that point lies in it.
+fn largest_floor_eye(src: &FileSource, walkable: usize, eye: f64) -> Option<DVec3> {
+    let cells = src.file().cells();
+    let area = |i: usize| cells[i].size().x * cells[i].size().y;
+    (0..walkable.min(cells.len()))
+        .max_by(|&a, &b| area(a).total_cmp(&area(b)).then(b.cmp(&a)))
+        .map(|i| {
+            let c = cells[i].center();
+            DVec3::new(c.x, c.y, cells[i].min.z + eye)
+        })
+        .filter(|p| src.locate(*p).is_ok())
+}
+
 fn largest_cell_centre(src: &FileSource) -> Option<DVec3> {
     let cells = src.file().cells();
     let mut order: Vec<usize> = (0..cells.len()).collect();
