@@ -49,7 +49,10 @@ if [ ! -f "$REAL_OSM" ] || ! echo "$REAL_OSM_SHA256  $REAL_OSM" | sha256sum -c -
   echo "$REAL_OSM_SHA256  $REAL_OSM" | sha256sum -c --quiet
 fi
 export SIGHTLINE_REAL_OSM="$PWD/$REAL_OSM"
-cargo test --workspace
+# Unit and integration tests, then doc tests. Not the examples, which a bare `cargo test`
+# would also build (21 binaries that no test runs): clippy above has checked them.
+cargo test --workspace --tests
+cargo test --workspace --doc
 
 # Browser end-to-end test of the walkthrough viewer (crates/server/e2e): Debian's chromium
 # driven by npm playwright-core, on target/debug/sightline. `cargo test` above built that

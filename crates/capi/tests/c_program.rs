@@ -11,28 +11,19 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::Arc;
 
-/// The static library `libsightline.a`, built by cargo for this test: `cargo test`
-/// builds the library as an rlib only, so the test asks cargo for the staticlib (the
-/// same profile and target directory, so it reuses the compiled crates).
+/// The static library `libsightline.a` of the build this test belongs to: cargo builds the
+/// library with every crate type of its manifest (`cdylib`, `staticlib`, `rlib`) in one
+/// compilation, and the names of those outputs carry no hash, so the archive lies beside
+/// this test's executable in `deps/`. No second cargo invocation (which would resolve
+/// features for this package alone and compile its dependencies again).
 fn static_lib() -> PathBuf {
     let exe = std::env::current_exe().unwrap();
-    let profile_dir = exe.parent().unwrap().parent().unwrap();
-    let mut cargo = Command::new(env!("CARGO"));
-    cargo.args(["build", "--quiet", "-p", "sightline-capi", "--lib"]);
-    if profile_dir.ends_with("release") {
-        cargo.arg("--release");
-    }
-    let out = cargo
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("cargo runs");
+    let lib = exe.parent().unwrap().join("libsightline.a");
     assert!(
-        out.status.success(),
-        "cargo build of libsightline failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
+        lib.exists(),
+        "{} is missing: cargo builds it with this test (crate-type staticlib)",
+        lib.display()
     );
-    let lib = profile_dir.join("libsightline.a");
-    assert!(lib.exists(), "{} was not built", lib.display());
     lib
 }
 
@@ -61,7 +52,7 @@ fn city_pvs(path: &Path) {
     let scene = Arc::new(sightline_scene::generate::city(5, 50));
     let cells = sightline_scene::cells::grid_cells(&scene, 25.0, 1.5, 2.0).unwrap();
     let method = sightline_methods::create(
-        "erosion",
+        "dual-ray",
         scene.clone(),
         &sightline_methods::MethodOptions::default(),
     )
