@@ -21,6 +21,35 @@ fn err(m: impl std::fmt::Display) -> ImportError {
     ImportError::Format(format!("invalid glTF: {m}"))
 }
 
+/// Whether the accessor `acc` holds elements of `size` bytes laid out as the gltf
+/// crate reads them: it asserts that (in debug builds) and misreads otherwise, so a
+/// corrupted file is refused before it reads. Sparse accessors' views must not be
+/// strided (glTF §3.6.2.3).
+pub(crate) fn accessor_fits(acc: &gltf::Accessor, size: usize) -> bool {
+    let stride_ok =
+        |v: Option<gltf::buffer::View>| v.is_none_or(|v| v.stride().is_none_or(|s| s >= size));
+    size > 0
+        && acc.size() == size
+        && stride_ok(acc.view())
+        && acc.sparse().is_none_or(|s| {
+            s.values().view().stride().is_none() && s.indices().view().stride().is_none()
+        })
+}
+
+/// Whether a primitive's POSITION (three `f32`) and index (one unsigned integer)
+/// accessors, when present, have the shapes the readers expect ([`accessor_fits`]).
+pub(crate) fn primitive_fits(prim: &gltf::Primitive) -> bool {
+    use gltf::accessor::DataType;
+    let pos = prim
+        .get(&gltf::Semantic::Positions)
+        .is_none_or(|a| a.data_type() == DataType::F32 && accessor_fits(&a, 12));
+    let idx = prim.indices().is_none_or(|a| {
+        matches!(a.data_type(), DataType::U8 | DataType::U16 | DataType::U32)
+            && accessor_fits(&a, a.data_type().size())
+    });
+    pos && idx
+}
+
 /// The glTF document of a .gltf or .glb and its JSON (the gltf crate does not expose
 /// extensions it does not know). Accessor indices of mesh primitives are checked
 /// first: the gltf crate's validation indexes the accessors with them unchecked and
@@ -116,6 +145,9 @@ pub fn parse(
         let mut mesh = Mesh::default();
         let mut rejected = false;
         for prim in gmesh.primitives() {
+            if !primitive_fits(&prim) {
+                continue;
+            }
             let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
             let Some(pos) = reader.read_positions() else {
                 continue;

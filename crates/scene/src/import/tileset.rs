@@ -423,6 +423,12 @@ impl Importer {
                     );
                     continue;
                 }
+                if !super::gltf::primitive_fits(&prim) {
+                    return Err(format!(
+                        "mesh {}: POSITION or indices accessor of the wrong type or layout",
+                        gmesh.index()
+                    ));
+                }
                 let get = |b: gltf::Buffer| buffers.get(b.index()).map(|d| &d.0[..]);
                 let reader = prim.reader(get);
                 // POSITION is required (glTF §3.7.2.1): unreadable means out of its buffer.
@@ -554,6 +560,9 @@ fn feature_ids(
     };
     let get = |b: gltf::Buffer| buffers.get(b.index()).map(|d| &d.0[..]);
     use gltf::accessor::{DataType, Iter};
+    if !super::gltf::accessor_fits(&acc, acc.data_type().size()) {
+        return Err(format!("_{semantic} accessor of the wrong layout"));
+    }
     let ids: Option<Vec<i64>> = match acc.data_type() {
         DataType::U8 => Iter::<u8>::new(acc, get).map(|i| i.map(i64::from).collect()),
         DataType::U16 => Iter::<u16>::new(acc, get).map(|i| i.map(i64::from).collect()),
