@@ -20,7 +20,7 @@ use roaring::RoaringBitmap;
 use sightline_geom::ViewCell;
 
 /// Longest chain of payloads decoded for one cell (a key cell is a chain of 1).
-pub const MAX_CHAIN: usize = 8;
+pub const MAX_CHAIN: usize = sightline_runtime::wire::CHAIN_LIMIT;
 
 /// Neighbours considered as references for each cell.
 const NEIGHBOURS: usize = 8;

@@ -44,3 +44,19 @@ impl PvsError {
         }
     }
 }
+
+/// The runtime reads every `.pvs` (`PvsFile` is built on it): its errors are ours, case
+/// for case and word for word.
+impl From<sightline_runtime::RuntimeError> for PvsError {
+    fn from(e: sightline_runtime::RuntimeError) -> Self {
+        use sightline_runtime::RuntimeError as R;
+        match e {
+            R::Io { path, source } => PvsError::Io { path, source },
+            R::NotPvs => PvsError::NotPvs,
+            R::Version { found, supported } => PvsError::Version { found, supported },
+            R::Truncated(m) => PvsError::Truncated(m),
+            R::Corrupt(m) => PvsError::Corrupt(m),
+            R::Invalid(m) => PvsError::Invalid(m),
+        }
+    }
+}

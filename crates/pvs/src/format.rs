@@ -17,37 +17,25 @@
 //! The bytes are a pure function of the header, the cells and their sets.
 
 use crate::crc::crc32;
-use crate::delta::{choose_references, MAX_CHAIN};
+use crate::delta::choose_references;
 use crate::error::PvsError;
-use crate::index::Grid;
-use crate::leaves::LeafTable;
-use crate::partition::Shard;
-use crate::shapes::ShapeTable;
+use crate::index::grid_index;
+use crate::leaves::leaf_table;
+use crate::shapes::shape_table;
 use rayon::prelude::*;
 use roaring::RoaringBitmap;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 use sightline_core::Cell;
 use sightline_geom::ViewCell;
-
-/// First eight bytes of every `.pvs` (the `\r\n` catches text-mode mangling).
-pub const MAGIC: [u8; 8] = *b"SLPVS\0\r\n";
-/// The newest format version this code writes and reads: version 2 adds the SHAP
-/// section (cells that are not boxes). A file whose cells are all boxes is written as
-/// version 1, the same bytes as before; both versions are read.
-pub const FORMAT_VERSION: u16 = 2;
-/// The version of a file whose cells are all boxes.
-pub const FORMAT_VERSION_BOXES: u16 = 1;
-
-pub(crate) const TAG_HEAD: [u8; 4] = *b"HEAD";
-pub(crate) const TAG_CELL: [u8; 4] = *b"CELL";
-pub(crate) const TAG_GRID: [u8; 4] = *b"GRID";
-pub(crate) const TAG_DATA: [u8; 4] = *b"DATA";
-pub(crate) const TAG_SHAP: [u8; 4] = *b"SHAP";
-pub(crate) const TAG_LEAF: [u8; 4] = *b"LEAF";
-pub(crate) const CODEC_RAW: u32 = 0;
-pub(crate) const CODEC_ZSTD: u32 = 1;
-pub(crate) const DIR_ENTRY_LEN: usize = 36;
-pub(crate) const PREAMBLE_FIXED: usize = 12;
+use sightline_runtime::wire::{
+    BlockEntry, CellTable, LeafTable, ShapeTable, CODEC_RAW, CODEC_ZSTD, DIR_ENTRY_LEN,
+    PREAMBLE_FIXED, TAG_CELL, TAG_DATA, TAG_GRID, TAG_HEAD, TAG_LEAF, TAG_SHAP,
+};
+/// The format's structs are defined once, in `sightline-runtime` (the reader engines
+/// link); this crate writes them. Version 2 adds the SHAP section (cells that are not
+/// boxes); a file whose cells are all boxes is written as version 1, the same bytes as
+/// before; both versions are read.
+pub use sightline_runtime::wire::{Header, FORMAT_VERSION, FORMAT_VERSION_BOXES, MAGIC};
 
 /// zstd level of the table sections and data blocks.
 const ZSTD_LEVEL: i32 = 19;
@@ -58,74 +46,6 @@ const ZSTD_LEVEL: i32 = 19;
 /// block stays small enough for on-line queries (figures in `docs/pvs-format.md`).
 const BLOCK_CELLS: usize = 4096;
 const BLOCK_BYTES: usize = 512 * 1024;
-/// Decoded sizes above this are treated as corruption, not allocated.
-pub(crate) const MAX_RAW_SECTION: u64 = 1 << 32;
-
-/// What a `.pvs` was computed from: the HEAD section.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Header {
-    /// `Scene::fingerprint()` of the scene the sets belong to.
-    pub fingerprint: u64,
-    /// Name of the method that built the sets.
-    pub method: String,
-    /// The method's parameters (`VisibilityMethod::params`).
-    pub params: Vec<(String, String)>,
-    /// Number of objects of the scene (every id is below it).
-    pub object_count: u32,
-    /// Number of cells of the whole build (a shard holds a subset of them).
-    pub cell_count: u32,
-    /// `Some` for a shard file (`build --shard I/N`), `None` for a complete file.
-    pub shard: Option<Shard>,
-}
-
-impl Header {
-    pub fn new(
-        fingerprint: u64,
-        method: &str,
-        params: Vec<(String, String)>,
-        object_count: usize,
-        cell_count: usize,
-    ) -> Header {
-        Header {
-            fingerprint,
-            method: method.to_string(),
-            params,
-            object_count: object_count as u32,
-            cell_count: cell_count as u32,
-            shard: None,
-        }
-    }
-}
-
-/// One zstd frame of the DATA section.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub(crate) struct BlockEntry {
-    /// Offset inside the DATA section.
-    pub offset: u64,
-    pub len: u32,
-    pub raw_len: u32,
-    pub crc: u32,
-}
-
-/// The CELL section, column by column (columns compress better than rows).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub(crate) struct CellTable {
-    /// x0, y0, z0, x1, y1, z1 of every cell of the build.
-    pub boxes: [Vec<f64>; 6],
-    /// The cells stored in this file, ascending; `None` = all of them.
-    pub present: Option<Vec<u32>>,
-    /// Per stored cell (in `present` order): 0 for a key cell, else 1 + the cell
-    /// index of its reference.
-    pub reference: Vec<u32>,
-    pub block: Vec<u32>,
-    /// Byte range of the payload inside the decompressed block.
-    pub offset: Vec<u32>,
-    pub len: Vec<u32>,
-    /// Number of ids in the cell's set (checked after decoding).
-    pub count: Vec<u32>,
-    pub blocks: Vec<BlockEntry>,
-}
-
 fn zstd(bytes: &[u8]) -> Result<Vec<u8>, PvsError> {
     zstd::bulk::compress(bytes, ZSTD_LEVEL).map_err(|e| PvsError::Invalid(format!("zstd: {e}")))
 }
@@ -215,7 +135,7 @@ pub fn encode_cells_with_leaves(
     opts: &EncodeOptions,
 ) -> Result<Vec<u8>, PvsError> {
     let bounds: Vec<ViewCell> = cells.iter().map(Cell::bounds).collect();
-    let shapes = ShapeTable::of(cells);
+    let shapes = shape_table(cells);
     let leaves = match leaves {
         Some(l) if l.len() != sets.len() => {
             return Err(PvsError::Invalid(format!(
@@ -224,7 +144,7 @@ pub fn encode_cells_with_leaves(
                 sets.len()
             )))
         }
-        Some(l) => Some(LeafTable::of(l)?),
+        Some(l) => Some(leaf_table(l)?),
         None => None,
     };
     let extra = Extra {
@@ -389,7 +309,7 @@ fn encode_layout(
         count: sets.iter().map(|s| s.len() as u32).collect(),
         blocks,
     };
-    let grid = Grid::build(cells);
+    let grid = grid_index(cells);
 
     let head_raw = postcard_bytes(header)?;
     let cell_raw = postcard_bytes(&table)?;
@@ -451,192 +371,3 @@ fn encode_layout(
     }
     Ok(out)
 }
-
-/// One entry of the section directory.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Section {
-    pub tag: [u8; 4],
-    pub codec: u32,
-    pub offset: u64,
-    pub len: u64,
-    pub raw_len: u64,
-    pub crc: u32,
-}
-
-/// Parse and check the preamble, reading through `read_at(offset, len)` from a file of
-/// `file_len` bytes.
-pub(crate) fn parse_preamble(
-    file_len: u64,
-    read_at: &dyn Fn(u64, usize) -> Result<Vec<u8>, PvsError>,
-) -> Result<Vec<Section>, PvsError> {
-    let head = read_at(0, (file_len as usize).min(PREAMBLE_FIXED))?;
-    if head.len() < MAGIC.len() && MAGIC.starts_with(&head) && !head.is_empty() {
-        return Err(PvsError::Truncated(format!(
-            "{file_len} bytes, shorter than the preamble"
-        )));
-    }
-    if head.len() < MAGIC.len() || head[..8] != MAGIC {
-        return Err(PvsError::NotPvs);
-    }
-    if head.len() < PREAMBLE_FIXED {
-        return Err(PvsError::Truncated(format!(
-            "{file_len} bytes, shorter than the preamble"
-        )));
-    }
-    let version = u16::from_le_bytes([head[8], head[9]]);
-    if !(FORMAT_VERSION_BOXES..=FORMAT_VERSION).contains(&version) {
-        return Err(PvsError::Version {
-            found: version,
-            supported: FORMAT_VERSION,
-        });
-    }
-    let count = u16::from_le_bytes([head[10], head[11]]) as usize;
-    let total = PREAMBLE_FIXED + count * DIR_ENTRY_LEN + 4;
-    if total as u64 > file_len {
-        return Err(PvsError::Truncated(format!(
-            "{file_len} bytes, shorter than the section directory"
-        )));
-    }
-    let bytes = read_at(0, total)?;
-    let stored = u32::from_le_bytes([
-        bytes[total - 4],
-        bytes[total - 3],
-        bytes[total - 2],
-        bytes[total - 1],
-    ]);
-    if crc32(&bytes[..total - 4]) != stored {
-        return Err(PvsError::Corrupt(
-            "checksum mismatch in the section directory".into(),
-        ));
-    }
-    let mut sections = Vec::with_capacity(count);
-    for i in 0..count {
-        let e =
-            &bytes[PREAMBLE_FIXED + i * DIR_ENTRY_LEN..PREAMBLE_FIXED + (i + 1) * DIR_ENTRY_LEN];
-        let u32_at = |o: usize| u32::from_le_bytes([e[o], e[o + 1], e[o + 2], e[o + 3]]);
-        let u64_at = |o: usize| u64::from_le_bytes(std::array::from_fn(|k| e[o + k]));
-        let s = Section {
-            tag: [e[0], e[1], e[2], e[3]],
-            codec: u32_at(4),
-            offset: u64_at(8),
-            len: u64_at(16),
-            raw_len: u64_at(24),
-            crc: u32_at(32),
-        };
-        let name = String::from_utf8_lossy(&s.tag).into_owned();
-        let end = s.offset.checked_add(s.len);
-        if end.is_none_or(|end| end > file_len) {
-            return Err(PvsError::Truncated(format!(
-                "section {name} ends at byte {}, the file has {file_len}",
-                s.offset.saturating_add(s.len)
-            )));
-        }
-        if s.offset < total as u64 || s.codec > CODEC_ZSTD || s.raw_len > MAX_RAW_SECTION {
-            return Err(PvsError::Corrupt(format!(
-                "bad directory entry for section {name}"
-            )));
-        }
-        sections.push(s);
-    }
-    Ok(sections)
-}
-
-/// Check a section's checksum and undo its codec.
-pub(crate) fn section_payload(s: &Section, stored: &[u8]) -> Result<Vec<u8>, PvsError> {
-    let name = String::from_utf8_lossy(&s.tag).into_owned();
-    if crc32(stored) != s.crc {
-        return Err(PvsError::Corrupt(format!(
-            "checksum mismatch in section {name}"
-        )));
-    }
-    match s.codec {
-        CODEC_RAW => Ok(stored.to_vec()),
-        _ => {
-            let raw = zstd::bulk::decompress(stored, s.raw_len as usize)
-                .map_err(|e| PvsError::Corrupt(format!("section {name}: {e}")))?;
-            if raw.len() as u64 != s.raw_len {
-                return Err(PvsError::Corrupt(format!(
-                    "section {name}: wrong decoded size"
-                )));
-            }
-            Ok(raw)
-        }
-    }
-}
-
-pub(crate) fn from_postcard<'a, T: Deserialize<'a>>(
-    bytes: &'a [u8],
-    what: &str,
-) -> Result<T, PvsError> {
-    postcard::from_bytes(bytes).map_err(|e| PvsError::Corrupt(format!("section {what}: {e}")))
-}
-
-impl CellTable {
-    /// Check a decoded table against the header (untrusted input).
-    pub(crate) fn validate(&self, header: &Header, data_len: u64) -> Result<(), PvsError> {
-        let bad = |m: String| Err(PvsError::Corrupt(format!("cell table: {m}")));
-        let n = header.cell_count as usize;
-        if self.boxes.iter().any(|c| c.len() != n) {
-            return bad("box count differs from the header's cell count".into());
-        }
-        let stored = match &self.present {
-            None => n,
-            Some(p) => {
-                if p.windows(2).any(|w| w[0] >= w[1]) || p.last().is_some_and(|&l| l as usize >= n)
-                {
-                    return bad("present cells are not ascending cell indices".into());
-                }
-                p.len()
-            }
-        };
-        if header.shard.is_none() && stored != n {
-            return bad("a complete file lacks cells".into());
-        }
-        for col in [
-            &self.reference,
-            &self.block,
-            &self.offset,
-            &self.len,
-            &self.count,
-        ] {
-            if col.len() != stored {
-                return bad("column lengths differ".into());
-            }
-        }
-        if self.count.iter().any(|&c| c > header.object_count) {
-            return bad("a set is larger than the scene".into());
-        }
-        for (k, &b) in self.block.iter().enumerate() {
-            let Some(be) = self.blocks.get(b as usize) else {
-                return bad(format!("cell refers to block {b} of {}", self.blocks.len()));
-            };
-            if self.offset[k] as u64 + self.len[k] as u64 > be.raw_len as u64 {
-                return bad("payload outside its block".into());
-            }
-        }
-        for be in &self.blocks {
-            if be.offset + be.len as u64 > data_len {
-                return bad("block outside the data section".into());
-            }
-        }
-        for r in &self.reference {
-            if *r as usize > n {
-                return bad("reference to a cell that does not exist".into());
-            }
-        }
-        Ok(())
-    }
-
-    pub(crate) fn cells(&self) -> Result<Vec<ViewCell>, PvsError> {
-        let n = self.boxes[0].len();
-        (0..n)
-            .map(|i| {
-                ViewCell::from_array(std::array::from_fn(|a| self.boxes[a][i]))
-                    .map_err(|e| PvsError::Corrupt(format!("cell {i}: {e}")))
-            })
-            .collect()
-    }
-}
-
-/// A stored cell's chain is followed at most this far before the file is declared corrupt.
-pub(crate) const CHAIN_LIMIT: usize = MAX_CHAIN;

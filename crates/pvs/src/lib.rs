@@ -28,8 +28,8 @@
 //! ```
 
 //!
-//! Modules depend on each other in one direction only: `crc`, `error`, `partition` and
-//! `index` are leaves; `delta` → `format` → `journal`, `query` → `shard` (merge),
+//! Modules depend on each other in one direction only: `crc`, `error` and `index` are
+//! leaves; `delta` → `format` → `journal`, `query` → `shard` (merge),
 //! `stored` and `build`.
 
 pub mod build;
@@ -40,7 +40,6 @@ pub mod format;
 pub mod index;
 pub mod journal;
 mod leaves;
-mod partition;
 pub mod query;
 mod shapes;
 pub mod shard;
@@ -50,7 +49,7 @@ pub use build::{build, BuildOptions, BuildStats};
 pub use crc::{crc32, Crc32};
 pub use error::PvsError;
 pub use format::{Header, FORMAT_VERSION, FORMAT_VERSION_BOXES, MAGIC};
-pub use partition::{Shard, SHARD_ENV};
 pub use query::PvsFile;
 pub use shard::merge;
+pub use sightline_runtime::{Shard, SHARD_ENV};
 pub use stored::StoredPvs;

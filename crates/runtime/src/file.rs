@@ -128,7 +128,7 @@ impl Pvs {
         Self::from_storage(Bytes::Owned(bytes))
     }
 
-    /// The checks of `sightline_pvs::PvsFile::open`, in its order.
+    /// Every check of a file from untrusted bytes: preamble, sections, tables, index.
     fn from_storage(bytes: Bytes) -> Result<Pvs, RuntimeError> {
         let sections = parse_preamble(&bytes)?;
         let file_len = bytes.len() as u64;
@@ -284,6 +284,46 @@ impl Pvs {
             CellKind::Box => None,
             _ => self.shapes.as_ref().map(|t| t.ids[cell as usize]),
         }
+    }
+
+    /// The half-spaces `[nx, ny, nz, d]` (`n · p <= d`) of a convex cell (a BSP leaf);
+    /// `None` for a cell of another kind.
+    pub fn cell_planes(&self, cell: u32) -> Option<&[[f64; 4]]> {
+        let t = self.shapes.as_ref()?;
+        let i = cell as usize;
+        (self.cell_kind(cell)? == CellKind::Convex)
+            .then(|| &t.planes[t.plane_offsets[i] as usize..t.plane_offsets[i + 1] as usize])
+    }
+
+    /// The boxes `[x0, y0, z0, x1, y1, z1]` of a voxel cell (an automatic cell of a mesh
+    /// level); `None` for a cell of another kind.
+    pub fn cell_voxel_boxes(&self, cell: u32) -> Option<&[[f64; 6]]> {
+        let t = self.shapes.as_ref()?;
+        let i = cell as usize;
+        (self.cell_kind(cell)? == CellKind::Voxels)
+            .then(|| &t.boxes[t.box_offsets[i] as usize..t.box_offsets[i + 1] as usize])
+    }
+
+    /// The cells whose rows this file stores, ascending (every cell but in a shard).
+    pub fn stored_cells(&self) -> impl Iterator<Item = u32> + '_ {
+        (0..self.cell_count()).filter(|&c| self.is_stored(c))
+    }
+
+    /// The byte offset and length of the DATA section (the compressed rows).
+    pub fn data_section(&self) -> (u64, u64) {
+        (self.data.offset, self.data.len)
+    }
+
+    /// Check the DATA section's checksum and decode every stored row (what `open`
+    /// leaves to the queries).
+    pub fn verify(&self, q: &mut Query) -> Result<(), RuntimeError> {
+        let stored = slice_at(&self.bytes, self.data.offset, self.data.len as usize)?;
+        section_payload(&self.data, stored)?;
+        let mut row = Vec::new();
+        for c in self.stored_cells() {
+            self.visible_into(q, c, &mut row)?;
+        }
+        Ok(())
     }
 
     /// Cell `c`'s number in the SHAP section (any kind), or `c` in a file without one.

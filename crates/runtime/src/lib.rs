@@ -1,10 +1,10 @@
-//! The read-only runtime of sightline's `.pvs` files, for engines and game code: it
-//! answers exactly what `sightline-pvs`'s reader answers (same checks on untrusted
-//! bytes, same cells, same rows), and once a [`Query`] scratch is warm a query allocates
-//! nothing.
+//! The read-only runtime of sightline's `.pvs` files, for engines and game code, and the
+//! one reader of the format: `sightline-pvs`'s `PvsFile` is built on it, and [`wire`]
+//! holds the format's structs that `sightline-pvs` writes. Once a [`Query`] scratch is
+//! warm a query allocates nothing.
 //!
 //! * [`Pvs`] opens a file from bytes or a path (memory-mapped with the `mmap`
-//!   feature), checks every table as `sightline_pvs::PvsFile` does, and answers: the
+//!   feature), checks every table against untrusted bytes, and answers: the
 //!   cell holding a point ([`Pvs::locate`], any cell kind: boxes, BSP leaves, voxel
 //!   cells; the lowest index on shared faces), a cell's sorted visible ids
 //!   ([`Pvs::visible`], delta rows decoded against their references), its visible leaves,
@@ -44,4 +44,4 @@ pub use error::RuntimeError;
 pub use file::{CellKind, Pvs};
 pub use gameplay::CellRelation;
 pub use query::{Query, DEFAULT_CACHE_BYTES};
-pub use wire::{Header, Shard, FORMAT_VERSION, FORMAT_VERSION_BOXES, MAGIC};
+pub use wire::{Header, Shard, FORMAT_VERSION, FORMAT_VERSION_BOXES, MAGIC, SHARD_ENV};

@@ -1,6 +1,7 @@
 //! The sections of a `.pvs` as they lie on disk (`docs/pvs-format.md`): the preamble,
-//! and the postcard structs of HEAD, CELL, GRID, SHAP and LEAF, field for field as
-//! `sightline-pvs` writes them, with the checks its reader makes on untrusted input.
+//! and the postcard structs of HEAD, CELL, GRID, SHAP and LEAF, with the checks a
+//! reader makes on untrusted input. The one definition of the format's structs:
+//! `sightline-pvs` writes these and reads through [`crate::Pvs`].
 
 use crate::error::{corrupt, RuntimeError};
 use serde::{Deserialize, Serialize};
@@ -12,103 +13,151 @@ pub const FORMAT_VERSION: u16 = 2;
 /// The version of a file whose cells are all boxes.
 pub const FORMAT_VERSION_BOXES: u16 = 1;
 
-pub(crate) const TAG_HEAD: [u8; 4] = *b"HEAD";
-pub(crate) const TAG_CELL: [u8; 4] = *b"CELL";
-pub(crate) const TAG_GRID: [u8; 4] = *b"GRID";
-pub(crate) const TAG_DATA: [u8; 4] = *b"DATA";
-pub(crate) const TAG_SHAP: [u8; 4] = *b"SHAP";
-pub(crate) const TAG_LEAF: [u8; 4] = *b"LEAF";
-const CODEC_RAW: u32 = 0;
-const CODEC_ZSTD: u32 = 1;
-const DIR_ENTRY_LEN: usize = 36;
-const PREAMBLE_FIXED: usize = 12;
+pub const TAG_HEAD: [u8; 4] = *b"HEAD";
+pub const TAG_CELL: [u8; 4] = *b"CELL";
+pub const TAG_GRID: [u8; 4] = *b"GRID";
+pub const TAG_DATA: [u8; 4] = *b"DATA";
+pub const TAG_SHAP: [u8; 4] = *b"SHAP";
+pub const TAG_LEAF: [u8; 4] = *b"LEAF";
+pub const CODEC_RAW: u32 = 0;
+pub const CODEC_ZSTD: u32 = 1;
+pub const DIR_ENTRY_LEN: usize = 36;
+pub const PREAMBLE_FIXED: usize = 12;
 /// Decoded sizes above this are treated as corruption, not allocated.
-const MAX_RAW_SECTION: u64 = 1 << 32;
+pub const MAX_RAW_SECTION: u64 = 1 << 32;
 /// A delta chain is followed at most this far (the writer caps depth at 8).
-pub(crate) const CHAIN_LIMIT: usize = 8;
+pub const CHAIN_LIMIT: usize = 8;
 
 /// Cell kinds of the SHAP section.
-pub(crate) const KIND_CONVEX: u8 = 1;
-pub(crate) const KIND_VOXELS: u8 = 2;
+pub const KIND_BOX: u8 = 0;
+pub const KIND_CONVEX: u8 = 1;
+pub const KIND_VOXELS: u8 = 2;
 
-/// Shard `index` of `count` of a build (`build --shard I/N`).
+/// Shard `index` of `count` of a build (`build --shard I/N`, 0-based): shard `I` of `N`
+/// owns the cells whose index is `I mod N` (interleaved, so costly districts are
+/// spread over the shards).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Shard {
     pub index: u32,
     pub count: u32,
 }
 
+/// Environment variables that name the shard of `--shard auto/N`, in order of preference:
+/// a Kubernetes Indexed Job and a Slurm job array.
+pub const SHARD_ENV: [&str; 2] = ["JOB_COMPLETION_INDEX", "SLURM_ARRAY_TASK_ID"];
+
 /// What a `.pvs` was computed from: the HEAD section.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Header {
-    /// The scene's fingerprint.
+    /// The fingerprint of the scene the sets belong to.
     pub fingerprint: u64,
-    /// The method that built the sets (SPEC §4 name).
+    /// The name of the method that built the sets.
     pub method: String,
     /// The method's parameters; mesh levels carry `sources` and `source_names`.
     pub params: Vec<(String, String)>,
-    /// Every id is below this.
+    /// Number of objects of the scene (every id is below it).
     pub object_count: u32,
-    /// Cells of the whole build.
+    /// Number of cells of the whole build (a shard holds a subset of them).
     pub cell_count: u32,
-    /// `Some` in a shard file.
+    /// `Some` for a shard file (`build --shard I/N`), `None` for a complete file.
     pub shard: Option<Shard>,
 }
 
+impl Header {
+    /// The header of a complete file.
+    pub fn new(
+        fingerprint: u64,
+        method: &str,
+        params: Vec<(String, String)>,
+        object_count: usize,
+        cell_count: usize,
+    ) -> Header {
+        Header {
+            fingerprint,
+            method: method.to_string(),
+            params,
+            object_count: object_count as u32,
+            cell_count: cell_count as u32,
+            shard: None,
+        }
+    }
+}
+
+/// One zstd frame of the DATA section.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub(crate) struct BlockEntry {
+pub struct BlockEntry {
+    /// Offset inside the DATA section.
     pub offset: u64,
     pub len: u32,
     pub raw_len: u32,
     pub crc: u32,
 }
 
+/// The CELL section, column by column (columns compress better than rows).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub(crate) struct CellTable {
+pub struct CellTable {
+    /// x0, y0, z0, x1, y1, z1 of every cell of the build.
     pub boxes: [Vec<f64>; 6],
+    /// The cells stored in this file, ascending; `None` = all of them.
     pub present: Option<Vec<u32>>,
+    /// Per stored cell (in `present` order): 0 for a key cell, else 1 + the cell
+    /// index of its reference.
     pub reference: Vec<u32>,
     pub block: Vec<u32>,
+    /// Byte range of the payload inside the decompressed block.
     pub offset: Vec<u32>,
     pub len: Vec<u32>,
+    /// Number of ids in the cell's set (checked after decoding).
     pub count: Vec<u32>,
     pub blocks: Vec<BlockEntry>,
 }
 
 /// `sightline_geom::UniformGrid` on the wire (glam's `DVec2` is a 2-tuple).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub(crate) struct Buckets {
+pub struct Buckets {
     pub origin: [f64; 2],
     pub step: [f64; 2],
     pub nx: u32,
     pub ny: u32,
 }
 
+/// The GRID section: a uniform 2D grid over the cells' footprints in compressed-row
+/// form, each bucket listing the cells whose closed box meets it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub(crate) struct GridIndex {
+pub struct GridIndex {
     pub buckets: Buckets,
+    /// `nx * ny + 1` offsets into `items`, by bucket id (row-major, `y * nx + x`).
     pub offsets: Vec<u32>,
+    /// Cell indices, ascending within each bucket.
     pub items: Vec<u32>,
 }
 
+/// The SHAP section: the shape of every cell, in columns.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub(crate) struct ShapeTable {
+pub struct ShapeTable {
+    /// Per cell: 0 box, 1 convex polyhedron, 2 voxel boxes.
     pub kinds: Vec<u8>,
+    /// Per cell: its number in its source (a BSP leaf, an automatic cell); 0 for a box.
     pub ids: Vec<u32>,
+    /// `cells + 1` offsets into `planes` (a convex cell's half-spaces).
     pub plane_offsets: Vec<u32>,
+    /// `[nx, ny, nz, d]`: the half-space `n · p <= d`.
     pub planes: Vec<[f64; 4]>,
+    /// `cells + 1` offsets into `boxes` (a voxel cell's boxes).
     pub box_offsets: Vec<u32>,
     pub boxes: Vec<[f64; 6]>,
 }
 
+/// The LEAF section: gap-coded visible-leaf sets, one per stored cell in stored order.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub(crate) struct LeafTable {
+pub struct LeafTable {
+    /// Per stored cell: `[first, gap, gap, ...]`, every gap ≥ 1.
     pub sets: Vec<Vec<u32>>,
 }
 
 /// One entry of the section directory.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Section {
+pub struct Section {
     pub tag: [u8; 4],
     pub codec: u32,
     pub offset: u64,
@@ -228,11 +277,61 @@ pub(crate) fn valid_box(a: &[f64; 6]) -> bool {
 }
 
 impl Shard {
-    pub(crate) fn validate(&self) -> Result<(), RuntimeError> {
+    /// Parse `I/N`, or `auto/N` taking `I` from `env(JOB_COMPLETION_INDEX)` or
+    /// `env(SLURM_ARRAY_TASK_ID)`; the error is one line naming the flag.
+    ///
+    /// ```
+    /// use sightline_runtime::Shard;
+    /// assert_eq!(Shard::parse("2/8", |_| None).unwrap(), Shard { index: 2, count: 8 });
+    /// let env = |k: &str| (k == "SLURM_ARRAY_TASK_ID").then(|| "3".to_string());
+    /// assert_eq!(Shard::parse("auto/4", env).unwrap(), Shard { index: 3, count: 4 });
+    /// assert!(Shard::parse("4/4", |_| None).is_err());
+    /// ```
+    pub fn parse(s: &str, env: impl Fn(&str) -> Option<String>) -> Result<Shard, RuntimeError> {
+        let bad = |m: String| RuntimeError::Invalid(format!("--shard {s}: {m}"));
+        let (i, n) = s
+            .split_once('/')
+            .ok_or_else(|| bad("expected I/N or auto/N".into()))?;
+        let count: u32 = n
+            .trim()
+            .parse()
+            .map_err(|_| bad(format!("'{n}' is not a shard count")))?;
+        let index: u32 = if i.trim() == "auto" {
+            let (var, v) = SHARD_ENV
+                .iter()
+                .find_map(|k| env(k).map(|v| (*k, v)))
+                .ok_or_else(|| {
+                    bad(format!(
+                        "auto needs {} or {} in the environment",
+                        SHARD_ENV[0], SHARD_ENV[1]
+                    ))
+                })?;
+            v.trim()
+                .parse()
+                .map_err(|_| bad(format!("{var}='{v}' is not a shard index")))?
+        } else {
+            i.trim()
+                .parse()
+                .map_err(|_| bad(format!("'{i}' is not a shard index")))?
+        };
+        let shard = Shard { index, count };
+        shard
+            .validate()
+            .map_err(|_| bad(format!("need 0 <= I < N, got {index}/{count}")))?;
+        Ok(shard)
+    }
+
+    /// An error unless `0 <= index < count`.
+    pub fn validate(&self) -> Result<(), RuntimeError> {
         if self.count == 0 || self.index >= self.count {
             return corrupt(format!("bad shard {}/{}", self.index, self.count));
         }
         Ok(())
+    }
+
+    /// Whether cell `cell` belongs to this shard.
+    pub fn owns(&self, cell: usize) -> bool {
+        cell as u64 % self.count as u64 == self.index as u64
     }
 }
 

@@ -1,6 +1,7 @@
-//! Real `.pvs` files for the runtime's tests, built with the `sightline-pvs` API: a
-//! generated city's grid (erosion), Quake's dm1 (`portals-fast`, convex leaves and a
-//! LEAF section), a level of voxel cells with a source map, and a shard file.
+//! Real `.pvs` files for the runtime's tests, built with the `sightline-pvs` API, each
+//! with the rows it was written from: a generated city's grid (erosion), Quake's dm1
+//! (`portals-fast`, convex leaves and a LEAF section), a level of voxel cells with a
+//! source map, and a shard file.
 #![allow(dead_code)]
 
 use sightline_core::{Cell, VoxelCell};
@@ -10,8 +11,18 @@ use sightline_pvs::{Header, Shard};
 use std::path::PathBuf;
 use std::sync::Arc;
 
+/// A `.pvs` and, per cell, the sorted row it was written with (`None`: not stored).
+pub struct Written {
+    pub bytes: Vec<u8>,
+    pub rows: Vec<Option<Vec<u32>>>,
+}
+
+fn rows_of(sets: &[roaring::RoaringBitmap]) -> Vec<Option<Vec<u32>>> {
+    sets.iter().map(|s| Some(s.iter().collect())).collect()
+}
+
 /// A small generated city, its 20 m grid at eye height, built with `erosion`.
-pub fn city() -> Vec<u8> {
+pub fn city() -> Written {
     let scene = Arc::new(sightline_scene::generate::city(7, 60));
     let cells = sightline_scene::cells::grid_cells(&scene, 20.0, 1.5, 2.0).unwrap();
     assert!(cells.len() >= 20, "{} cells", cells.len());
@@ -35,7 +46,8 @@ pub fn city() -> Vec<u8> {
     .unwrap();
     let bytes = std::fs::read(&out).unwrap();
     let _ = std::fs::remove_dir_all(&dir);
-    bytes
+    let rows = cells.iter().map(|c| Some(method.pvs(c).unwrap())).collect();
+    Written { bytes, rows }
 }
 
 pub fn dm1_path() -> PathBuf {
@@ -43,7 +55,7 @@ pub fn dm1_path() -> PathBuf {
 }
 
 /// Quake's dm1 built as `sightline build dm1.bsp --method portals-fast` builds it.
-pub fn dm1() -> Vec<u8> {
+pub fn dm1() -> Written {
     let level = sightline_scene::import::bsp::load_bsp(&dm1_path()).unwrap();
     let scene = level.to_scene();
     let portals = sightline_portals::Portals::build(&level).unwrap();
@@ -70,7 +82,7 @@ pub fn dm1() -> Vec<u8> {
         cells.len(),
     );
     let present: Vec<u32> = (0..cells.len() as u32).collect();
-    encode_cells_with_leaves(
+    let bytes = encode_cells_with_leaves(
         &header,
         &cells,
         &present,
@@ -78,7 +90,11 @@ pub fn dm1() -> Vec<u8> {
         Some(&leaves),
         &EncodeOptions::default(),
     )
-    .unwrap()
+    .unwrap();
+    Written {
+        bytes,
+        rows: rows_of(&sets),
+    }
 }
 
 fn rng(seed: u64) -> impl FnMut() -> f64 {
@@ -97,7 +113,7 @@ fn bx(a: [f64; 6]) -> ViewCell {
 
 /// An indoor level of automatic cells (unions of voxel boxes, some L-shaped and
 /// interleaved) with clusters mapped to source objects, as a mesh level's build stores.
-pub fn voxels() -> Vec<u8> {
+pub fn voxels() -> Written {
     let mut cells = Vec::new();
     for j in 0..4 {
         for i in 0..4 {
@@ -150,11 +166,15 @@ pub fn voxels() -> Vec<u8> {
         cells.len(),
     );
     let present: Vec<u32> = (0..cells.len() as u32).collect();
-    encode_cells(&header, &cells, &present, &sets, &EncodeOptions::default()).unwrap()
+    let bytes = encode_cells(&header, &cells, &present, &sets, &EncodeOptions::default()).unwrap();
+    Written {
+        bytes,
+        rows: rows_of(&sets),
+    }
 }
 
 /// Shard 1 of 3 of a grid of 60 boxes with PVS-like sets (delta chains inside the shard).
-pub fn shard() -> Vec<u8> {
+pub fn shard() -> Written {
     let cells: Vec<ViewCell> = (0..60)
         .map(|k| {
             let (i, j) = ((k % 10) as f64 * 10.0, (k / 10) as f64 * 10.0);
@@ -172,7 +192,12 @@ pub fn shard() -> Vec<u8> {
         .collect();
     let mut header = Header::new(0x5eed, "erosion", vec![], 500, 60);
     header.shard = Some(Shard { index: 1, count: 3 });
-    sightline_pvs::format::encode(&header, &cells, &present, &sets).unwrap()
+    let bytes = sightline_pvs::format::encode(&header, &cells, &present, &sets).unwrap();
+    let mut rows = vec![None; cells.len()];
+    for (&k, s) in present.iter().zip(sets) {
+        rows[k as usize] = Some(s);
+    }
+    Written { bytes, rows }
 }
 
 /// Points to locate in a file: every cell's centre, corners and face centres, and
