@@ -1,7 +1,8 @@
-//! The `.pvs` readers on arbitrary bytes: `sightline-pvs` and `sightline-runtime` must
-//! both return an error or both open the file and give the same answers (cells, point
-//! location, rows or the same failure, leaves), and neither may panic, hang or allocate
-//! without bound.
+//! The `.pvs` reader on arbitrary bytes, through both faces: `sightline-runtime`'s `Pvs`
+//! and `sightline-pvs`'s `PvsFile` (built on it, adding the pipeline's types and shapes)
+//! must both return an error or both open the file and give the same answers (cells,
+//! point location, rows or the same failure, leaves), and neither may panic, hang or
+//! allocate without bound.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
