@@ -43,7 +43,7 @@ pub struct Shard {
 pub struct Header {
     /// The scene's fingerprint.
     pub fingerprint: u64,
-    /// The method that built the sets (SPEC §4 name).
+    /// The method that built the sets (the registry's name, `docs/pvs-format.md`).
     pub method: String,
     /// The method's parameters; mesh levels carry `sources` and `source_names`.
     pub params: Vec<(String, String)>,

@@ -72,15 +72,16 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         spawns: spawn,
         view_volumes,
     };
-    // A level is judged on its own cells: with the method named, or its default (a
-    // mesh level's walkable viewcells) when no .pvs file is given.
+    // A .pvs file is judged on its cells; else a level is judged on its own cells with
+    // the method named, or its default (a mesh level's walkable viewcells).
     let level_method = match (&pvs, method.as_deref()) {
+        (Some(_), _) => None,
         (None, None) if kind == SceneKind::Mesh => Some(sightline_world::default_method(kind)),
-        (_, Some(name)) => {
+        (None, None) => None,
+        (None, Some(name)) => {
             let m = sightline_world::resolve(kind, &scene.scene, Some(name))?;
             Some(m).filter(|&m| sightline_world::on_level_cells(m))
         }
-        _ => None,
     };
     if let Some(m) = level_method {
         return check_level(
