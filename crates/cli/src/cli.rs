@@ -449,7 +449,7 @@ pub enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// From-point occlusion culling along a camera path (SPEC §11): per frame the objects
+    /// From-point occlusion culling along a camera path (docs/culling.md): per frame the objects
     /// that may be visible, with `hzb`, `hom`, `hom-approx` (not conservative) or `cplp`.
     Frames {
         #[command(flatten)]

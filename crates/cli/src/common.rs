@@ -6,21 +6,50 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use sightline_scene::import::{Crs, ImportOptions};
 use sightline_scene::Scene;
+use sightline_world::{OpenOptions, Standing, World};
 use std::io::IsTerminal;
 
 /// Load the scene named on the command line.
 pub fn load_scene(arg: &SceneArg) -> anyhow::Result<Scene> {
+    sightline_scene::import::load(&arg.scene, &import_options(arg))
+        .with_context(|| format!("cannot load {}", arg.scene.display()))
+}
+
+/// The importer's options of a scene argument.
+pub fn import_options(arg: &SceneArg) -> ImportOptions {
     let crs = match arg.crs {
         CrsArg::Auto => Crs::Auto,
         CrsArg::Projected => Crs::Projected,
         CrsArg::Wgs84 => Crs::Wgs84,
     };
-    let opts = ImportOptions {
+    ImportOptions {
         crs,
         strict: arg.strict,
+    }
+}
+
+/// Open the scene of `arg` as a [`World`] (any kind), with a mesh level's smallest hole
+/// and standing.
+pub fn open_world(
+    arg: &SceneArg,
+    smallest_hole: Option<f64>,
+    standing: Standing,
+) -> anyhow::Result<World> {
+    let opts = OpenOptions {
+        import: import_options(arg),
+        smallest_hole,
+        standing,
     };
-    sightline_scene::import::load(&arg.scene, &opts)
-        .with_context(|| format!("cannot load {}", arg.scene.display()))
+    World::open(&arg.scene, &opts)
+}
+
+/// Print a mesh level's warnings (a raised hole, skipped triangles, a leak) unless quiet.
+pub fn print_warnings(warnings: &[String], quiet: bool) {
+    if !quiet {
+        for w in warnings {
+            eprintln!("warning: {w}");
+        }
+    }
 }
 
 /// A progress bar over `len` items, hidden when quiet or not on a terminal.

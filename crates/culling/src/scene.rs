@@ -122,10 +122,10 @@ impl CullScene {
     /// triangle — or each convex planar polygon a mesh is a fan of, as a BSP level's
     /// faces are — occludes what lies entirely behind it, drawn from whichever side the
     /// eye is on. Conservative where the surfaces are opaque: a Quake level's world
-    /// faces bound its solid and sky, which SPEC §11 makes opaque (a face named `*…`, a
+    /// faces bound its solid and sky, which `docs/culling.md` treats as opaque (a face named `*…`, a
     /// liquid surface, is see-through and left out); a mesh scene's triangles are opaque
     /// to the renderer and to the item-buffer truth. It is *not* the 2.5D inner bound
-    /// of SPEC §1, under which an open mesh hides nothing.
+    /// of the from-region methods (`docs/culling.md`), under which an open mesh hides nothing.
     pub fn with_surfaces(scene: &Scene) -> CullScene {
         let mut cs = CullScene::new(scene);
         for (id, o) in scene.objects.iter().enumerate() {

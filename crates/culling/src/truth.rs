@@ -1,8 +1,8 @@
 //! The independent ground truth of one frame: an item buffer of the objects' *real*
 //! geometry (block prisms, flat polygons, mesh triangles) at full resolution, sampled at
 //! pixel centres with a depth test ([`sightline_raster::Coverage::Standard`]). Every id
-//! it shows is truly visible from the eye within the frustum (SPEC §3: the sampled set
-//! is a lower bound), so a culler that reports one of them hidden is wrong.
+//! it shows is truly visible from the eye within the frustum (`docs/methods/sampled.md`: the
+//! sampled set is a lower bound), so a culler that reports one of them hidden is wrong.
 //!
 //! It shares nothing with the cullers but the frustum: not the inner/outer bounds, not
 //! the masked buffer, not the coverage rules.

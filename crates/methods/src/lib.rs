@@ -67,10 +67,10 @@ pub fn create(
         (Family::Sampled, Options::Sampled(o)) => sampled::create(scene, &o),
         (Family::Baseline, _) => Ok(Box::new(All { scene })),
         (Family::Portals, _) => Err(MethodError::Other(format!(
-            "{m} works on BSP levels: prepare it with sightline_portals::PortalMethod (the CLI does for a .bsp scene)"
+            "{m} works on the cells of a level (BSP, mesh): open the scene with sightline_world::World, which prepares it"
         ))),
         (Family::Volumetric, _) => Err(MethodError::Other(format!(
-            "{m} works on mesh levels: prepare it with sightline_autocells::AutoCells::walkable (the CLI does for a .obj/.gltf scene)"
+            "{m} works on mesh levels: open the scene with sightline_world::World, which builds its walkable viewcells"
         ))),
         (_, o) => Err(MethodError::Other(format!(
             "{m}: options of another family ({o:?})"

@@ -51,7 +51,7 @@ pub const SHARD_ENV: [&str; 2] = ["JOB_COMPLETION_INDEX", "SLURM_ARRAY_TASK_ID"]
 pub struct Header {
     /// The fingerprint of the scene the sets belong to.
     pub fingerprint: u64,
-    /// The name of the method that built the sets.
+    /// The name of the method that built the sets (the registry's, `docs/pvs-format.md`).
     pub method: String,
     /// The method's parameters; mesh levels carry `sources` and `source_names`.
     pub params: Vec<(String, String)>,

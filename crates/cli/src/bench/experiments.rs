@@ -1,6 +1,8 @@
 //! The experiments of the papers that the report reproduces, each a function that appends raw [`Record`]s and
 //! writes its section of the report.
 
+use super::context::BenchContext;
+use super::context::NamedScene;
 use super::indoor::IndoorRecord;
 use super::machine::Machine;
 use super::meshes::{MeshLevel, MeshRecord};
@@ -76,11 +78,6 @@ pub struct Bench {
     quiet: bool,
 }
 
-pub struct NamedScene {
-    pub name: String,
-    pub scene: Arc<Scene>,
-}
-
 fn cell_key(c: &ViewCell) -> String {
     c.to_string()
 }
@@ -111,6 +108,15 @@ impl Bench {
             from_point: vec![],
             truths: HashMap::new(),
             quiet,
+        }
+    }
+
+    /// The part of the bench a section writes to.
+    pub(crate) fn context(&mut self) -> BenchContext<'_> {
+        BenchContext {
+            suite: &self.suite,
+            notes: &mut self.notes,
+            quiet: self.quiet,
         }
     }
 
@@ -841,7 +847,13 @@ pub fn run(
         experiments.push(("scaling", Box::new(|b, r| scaling(b, &names, r, out))));
         experiments.push((
             "from-point",
-            Box::new(|b, r| super::from_point::from_point(b, &scenes, r, out)),
+            Box::new(|b, r| {
+                let mut records = Vec::new();
+                let done =
+                    super::from_point::from_point(&mut b.context(), &mut records, &scenes, r, out);
+                b.from_point.extend(records);
+                done
+            }),
         ));
     }
     // One experiment per level, so that raw.json is written after each (a long run that

@@ -1,4 +1,4 @@
-//! The from-point section (SPEC §11, issue 40): occluder triangles per second per core
+//! The from-point section (`docs/culling.md`, issue 40): occluder triangles per second per core
 //! of the masked tile rasterizer (scalar and SIMD paths) next to the full-resolution
 //! rasterizer of `sightline-raster` on the same faces in the same run; what `hzb` culls
 //! against a full-resolution depth buffer of the same occluders (the measure Masked
@@ -7,9 +7,10 @@
 //! objects along a walk with the PVS of the eye's cell alone and with from-point culling
 //! inside it.
 
-use super::experiments::{Bench, NamedScene};
+use super::context::{BenchContext, NamedScene};
 use super::plots::{line_chart, Scale, Series};
 use super::report::{Report, Table};
+use super::suite::Suite;
 use serde::Serialize;
 use sightline_culling::masked::RasterPath;
 use sightline_culling::measure::{full_res, full_res_occluded, masked_throughput};
@@ -75,8 +76,7 @@ fn m(v: f64) -> String {
 }
 
 /// Measure one scene along a street walk.
-fn measure_scene(b: &Bench, s: &NamedScene) -> anyhow::Result<FromPointRecord> {
-    let su = &b.suite;
+fn measure_scene(su: &Suite, s: &NamedScene) -> anyhow::Result<FromPointRecord> {
     let size = su.from_point_size;
     let walk = street_walk(&s.scene, su.from_point_frames, su.seed, 60.0);
     if walk.is_empty() {
@@ -156,8 +156,7 @@ fn measure_scene(b: &Bench, s: &NamedScene) -> anyhow::Result<FromPointRecord> {
 /// Visible objects along a walk: the PVS of the eye's cell (a [`PVS_CELL_M`] grid cell,
 /// `erosion`, computed on line and cached), and `hzb` inside it. Returns the two series
 /// and the median share of the PVS the second level removes.
-fn walk_plot(b: &Bench, s: &NamedScene) -> anyhow::Result<(Vec<Series>, f64)> {
-    let su = &b.suite;
+fn walk_plot(su: &Suite, s: &NamedScene) -> anyhow::Result<(Vec<Series>, f64)> {
     let walk = street_walk(&s.scene, su.from_point_walk_frames, su.seed + 1, 60.0);
     let region = create(PVS_METHOD, s.scene.clone(), &MethodOptions::default())?;
     let cs = Arc::new(CullScene::new(&s.scene));
@@ -206,21 +205,22 @@ fn walk_plot(b: &Bench, s: &NamedScene) -> anyhow::Result<(Vec<Series>, f64)> {
 }
 
 /// The section, on `scenes` (the suite's city and the scenes given) and the suite's
-/// metropolis.
+/// metropolis; each scene's figures go to `records` as they are measured.
 pub fn from_point(
-    b: &mut Bench,
+    ctx: &mut BenchContext<'_>,
+    records: &mut Vec<FromPointRecord>,
     scenes: &[NamedScene],
     rep: &mut Report,
     out: &Path,
 ) -> anyhow::Result<()> {
-    let n = b.suite.metropolis_buildings;
+    let n = ctx.suite.metropolis_buildings;
     let metropolis = NamedScene {
         name: format!("metropolis-{n}"),
-        scene: Arc::new(sightline_scene::generate::metropolis(b.suite.seed, n)),
+        scene: Arc::new(sightline_scene::generate::metropolis(ctx.suite.seed, n)),
     };
     let mut all: Vec<&NamedScene> = scenes.iter().collect();
     let mut added = Vec::new();
-    for p in &b.suite.from_point_scenes {
+    for p in &ctx.suite.from_point_scenes {
         let p = Path::new(p);
         let name = p.file_stem().and_then(|s| s.to_str()).unwrap_or("scene");
         if !p.exists() || scenes.iter().any(|s| s.name == name) {
@@ -231,19 +231,19 @@ pub fn from_point(
                 name: name.to_string(),
                 scene: Arc::new(sc),
             }),
-            Err(e) => b.notes.push(format!("cannot load {}: {e}", p.display())),
+            Err(e) => ctx.notes.push(format!("cannot load {}: {e}", p.display())),
         }
     }
     all.extend(added.iter());
     all.push(&metropolis);
-    let (w, h) = b.suite.from_point_size;
+    let (w, h) = ctx.suite.from_point_size;
     rep.section("From-point culling (hzb, hom, cplp)");
     rep.para(&format!(
         "Street-level walks ({} frames per scene, {w}×{h}, 60° vertical field of view, one thread). Occluder rasterization: every front face of every occluder prism in the frustum, drawn by the masked tile rasterizer of `hzb` (scalar path, SIMD path `{}` chosen at run time; the two give identical buffers) and by the full-resolution inner-union rasterizer of `sightline-raster` (every {}th frame), same faces, same run; rates are medians over frames and include clipping and projection. Culled %: share of all objects culled (frustum and occlusion). `hzb` vs full-res: objects `hzb` hides by occlusion over those a full-resolution depth buffer of the same occluders hides, same frames. False culls: objects the item-buffer truth sees from the eye and a culler hid (every {}th frame); they must be 0.",
-        b.suite.from_point_frames,
+        ctx.suite.from_point_frames,
         RasterPath::Simd.describe(),
-        b.suite.from_point_full_every,
-        b.suite.from_point_truth_every,
+        ctx.suite.from_point_full_every,
+        ctx.suite.from_point_truth_every,
     ));
     let mut raster = Table::new(&[
         "scene",
@@ -264,11 +264,11 @@ pub fn from_point(
         "false culls / truth frames",
     ]);
     for s in all.iter().copied() {
-        b.log(&format!("from-point on {}", s.name));
-        let r = match measure_scene(b, s) {
+        ctx.log(&format!("from-point on {}", s.name));
+        let r = match measure_scene(ctx.suite, s) {
             Ok(r) => r,
             Err(e) => {
-                b.notes
+                ctx.notes
                     .push(format!("from-point culling skipped on {}: {e}", s.name));
                 continue;
             }
@@ -293,13 +293,13 @@ pub fn from_point(
                 format!("{} / {}", c.false_culls, c.truth_frames),
             ]);
             if c.false_culls > 0 {
-                b.notes.push(format!(
+                ctx.notes.push(format!(
                     "{} had {} false culls on {} — a bug",
                     c.method, c.false_culls, r.scene
                 ));
             }
         }
-        b.from_point.push(r);
+        records.push(r);
     }
     rep.table(&raster);
     rep.table(&methods);
@@ -309,8 +309,8 @@ pub fn from_point(
         .copied()
         .find(|s| s.name.contains("lyon"))
         .unwrap_or(scenes.get(1).unwrap_or(&scenes[0]));
-    b.log(&format!("from-point walk plot on {}", s.name));
-    match walk_plot(b, s) {
+    ctx.log(&format!("from-point walk plot on {}", s.name));
+    match walk_plot(ctx.suite, s) {
         Ok((series, removed)) => {
             line_chart(
                 &out.join("walk-visible.png"),
@@ -324,11 +324,11 @@ pub fn from_point(
             rep.para(&format!(
                 "Walk plot on {} ({} frames, 3 m apart): the first level is the PVS of the eye's {PVS_CELL_M} m cell by `{PVS_METHOD}` (z 1.5–2 m), the second `hzb` from the eye inside it; the second level removes a median {removed:.1} % of the PVS.",
                 s.name,
-                b.suite.from_point_walk_frames
+                ctx.suite.from_point_walk_frames
             ));
             rep.image("walk-visible.png", "visible objects along a walk");
         }
-        Err(e) => b
+        Err(e) => ctx
             .notes
             .push(format!("walk plot skipped on {}: {e}", s.name)),
     }

@@ -10,7 +10,6 @@ use super::indoor::{peak_mib, reset_peak};
 use super::plots::{line_chart, Scale, Series};
 use super::report::{Report, Table};
 use super::suite::Suite;
-use crate::commands::mesh;
 use anyhow::Context;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -47,7 +46,7 @@ impl MeshLevel {
             )),
             MeshLevel::File(p) => {
                 anyhow::ensure!(
-                    mesh::is_mesh(p),
+                    sightline_world::kind_of(p) == sightline_world::SceneKind::Mesh,
                     "{} is not a mesh level (.obj, .gltf, .glb)",
                     p.display()
                 );
@@ -124,9 +123,11 @@ pub fn measure_level(
     let (raw, hole) = level.load()?;
     reset_peak();
     let t = Instant::now();
-    let (clustered, auto) = mesh::cut_level(&raw, &name, hole, false, true)?;
+    let sightline_world::CutLevel {
+        clustered, auto, ..
+    } = sightline_world::cut_level(&raw, &name, hole, false)?;
     let seconds_cut = t.elapsed().as_secs_f64();
-    let (eye, viewcells) = mesh::walkable_viewcells(&auto, &mesh::Standing::default())?;
+    let (eye, viewcells) = sightline_world::walkable_viewcells(&auto, &Default::default())?;
     anyhow::ensure!(
         !viewcells.is_empty(),
         "no walkable floor in {name} (no upward surface with room for the eye at {eye})"
@@ -134,7 +135,7 @@ pub fn measure_level(
     let picked: Vec<usize> = {
         let all: Vec<usize> = (0..viewcells.len()).collect();
         match sample {
-            Some(k) if k > 0 => mesh::spread(&all, k),
+            Some(k) if k > 0 => sightline_world::spread(&all, k),
             _ => all,
         }
     };

@@ -6,6 +6,7 @@
 //! `missed` and `over` are measured against the sampled ground truth, computed once per
 //! cell and shared by all methods.
 
+mod context;
 mod experiments;
 mod from_point;
 mod indoor;

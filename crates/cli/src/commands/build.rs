@@ -1,13 +1,14 @@
 //! `sightline build`, `sightline merge` and `sightline query`: the PVS store.
 
 use crate::cli::{Command, SceneArg};
-use crate::common::{load_scene, method_options, print_json, progress};
+use crate::common::{load_scene, method_options, open_world, print_json, print_warnings, progress};
 use anyhow::Context;
 use serde::Serialize;
 use sightline_geom::{DVec3, ViewCell};
 use sightline_methods::{create, Method, MethodOptions};
 use sightline_pvs::build::{journal_path, write_atomic};
 use sightline_pvs::{build, merge, BuildOptions, PvsFile, Shard};
+use sightline_world::{SceneKind, Standing, World};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
@@ -30,50 +31,35 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
             spawn,
             view_volumes,
         } => {
-            let standing = crate::commands::mesh::Standing {
+            let standing = Standing {
                 eye_height,
                 spawns: spawn,
                 view_volumes,
             };
-            let mesh = crate::commands::mesh::is_mesh(&scene.scene);
-            let method = method.unwrap_or_else(|| {
-                if mesh {
-                    Method::Volumetric.name().to_string()
-                } else {
-                    Method::Erosion.name().to_string()
-                }
-            });
-            if mesh && method == Method::Volumetric.name() {
+            let kind = sightline_world::kind_of(&scene.scene);
+            // No --method: the kind's default (a mesh level's walkable viewcells).
+            let m = sightline_world::resolve(kind, &scene.scene, method.as_deref())?;
+            let opts = if m == Method::Volumetric {
+                MethodOptions::default()
+            } else {
+                anyhow::ensure!(
+                    !standing.is_set(),
+                    "--eye-height, --spawn and --view-volumes set the viewcells of a mesh level (.obj, .gltf, .glb) with --method volumetric"
+                );
+                method_options(m.name(), resolution, sweep, planes, &set)?
+            };
+            if sightline_world::on_level_cells(m) {
                 anyhow::ensure!(
                     cells.is_none() && shard.is_none() && !resume,
-                    "a mesh level is built whole on its walkable viewcells: no --cells, --shard or --resume"
+                    "{}",
+                    match (kind, m) {
+                        (SceneKind::Bsp, _) => "a .bsp level is built whole, every open leaf a cell: no --cells, --shard or --resume",
+                        (_, Method::Volumetric) => "a mesh level is built whole on its walkable viewcells: no --cells, --shard or --resume",
+                        _ => "a mesh level is built whole on its automatic cells: no --cells, --shard or --resume",
+                    }
                 );
-                return crate::commands::mesh::build_volumetric(
-                    &scene,
-                    smallest_hole,
-                    &standing,
-                    &out,
-                    quiet,
-                );
-            }
-            anyhow::ensure!(
-                !standing.is_set(),
-                "--eye-height, --spawn and --view-volumes set the viewcells of a mesh level (.obj, .gltf, .glb) with --method volumetric"
-            );
-            let opts = method_options(&method, resolution, sweep, planes, &set)?;
-            if let Some(full) = crate::commands::mesh::portal_mode(&scene.scene, &method) {
-                anyhow::ensure!(
-                    cells.is_none() && shard.is_none() && !resume,
-                    "a mesh level is built whole on its automatic cells: no --cells, --shard or --resume"
-                );
-                return crate::commands::mesh::build(&scene, full, smallest_hole, &out, quiet);
-            }
-            if let Some(mode) = crate::commands::bsp::portal_mode(&scene.scene, &method)? {
-                anyhow::ensure!(
-                    cells.is_none() && shard.is_none() && !resume,
-                    "a .bsp level is built whole, every open leaf a cell: no --cells, --shard or --resume"
-                );
-                return crate::commands::bsp::build(&scene.scene, mode, &out, quiet);
+                let world = open_world(&scene, smallest_hole, standing)?;
+                return build_level(&world, m, &out, quiet);
             }
             let Some(cells) = cells else {
                 anyhow::bail!(
@@ -83,7 +69,7 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
             run_build(
                 &scene,
                 &cells,
-                &method,
+                m.name(),
                 opts,
                 &out,
                 resume,
@@ -112,6 +98,51 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         },
         _ => unreachable!("dispatched by commands::run"),
     }
+}
+
+/// `build LEVEL -o L.pvs` with a method on the level's own cells: every open leaf of a
+/// BSP level, every automatic cell of a mesh level, or its walkable viewcells then its
+/// automatic cells (`volumetric`).
+fn build_level(world: &World, m: Method, out: &Path, quiet: bool) -> anyhow::Result<()> {
+    let t = Instant::now();
+    let spinner = progress(1, quiet, "cells, portals, PVS of every cell");
+    let enc = world.encode(m)?;
+    spinner.finish_and_clear();
+    write_atomic(out, &enc.bytes).with_context(|| format!("cannot write {}", out.display()))?;
+    if quiet {
+        return Ok(());
+    }
+    let seconds = t.elapsed().as_secs_f64();
+    let bytes = enc.bytes.len();
+    match &enc.mesh {
+        Some(f) => {
+            print_warnings(&f.warnings, quiet);
+            let cells = if m == Method::Volumetric {
+                format!(
+                    "{} walkable viewcells and {} free-space cells",
+                    f.viewcells, f.auto_cells
+                )
+            } else {
+                format!("{} automatic cells, {} portals", f.auto_cells, f.portals)
+            };
+            eprintln!(
+                "wrote {}: {cells}, {} clusters of {} source objects, smallest hole {:.3}, method {}, {bytes} bytes, {seconds:.1} s",
+                out.display(),
+                f.clusters,
+                f.sources,
+                f.smallest_hole,
+                m.name(),
+            );
+        }
+        None => eprintln!(
+            "wrote {}: {} leaves, method {}, {bytes} bytes ({:.0} B/leaf), {seconds:.1} s",
+            out.display(),
+            enc.cells,
+            m.name(),
+            bytes as f64 / enc.cells as f64,
+        ),
+    }
+    Ok(())
 }
 
 /// Read a cells.json: a JSON array of `[x0,y0,z0,x1,y1,z1]` boxes.
@@ -246,13 +277,10 @@ fn run_query(path: &Path, at: [f64; 3], json: bool) -> anyhow::Result<()> {
         leaf: file.cell(index).and_then(|c| c.id()),
         index,
         method: file.header().method.clone(),
-        visible_sources: crate::commands::mesh::sources_from_params(
-            &file.header().params,
-            &visible,
-        ),
+        visible_sources: sightline_world::sources_from_params(&file.header().params, &visible),
         visible,
         visible_leaves: file.visible_leaves(index).map(<[u32]>::to_vec),
-        free_space: crate::commands::mesh::free_space(&file.header().params, index),
+        free_space: sightline_world::free_space(&file.header().params, index),
     };
     if json {
         print_json(&report)

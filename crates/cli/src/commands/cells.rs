@@ -2,10 +2,11 @@
 //! and write them as a JSON array of `[x0,y0,z0,x1,y1,z1]` boxes.
 
 use crate::cli::Command;
-use crate::common::{load_scene, write_atomic};
+use crate::common::{load_scene, open_world, print_warnings, write_atomic};
 use anyhow::{bail, Context};
 use sightline_geom::{DVec2, Polygon, ViewCell};
 use sightline_scene::cells;
+use sightline_world::{SceneKind, Standing};
 use std::path::Path;
 use std::time::Instant;
 
@@ -21,8 +22,9 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
     else {
         unreachable!("cells::run called with another command")
     };
-    if size.is_none() && crate::commands::mesh::is_mesh(&scene.scene) {
-        return crate::commands::mesh::cells(&scene, smallest_hole, &out, quiet);
+    // No --size on a mesh level: its automatic cells.
+    if size.is_none() && sightline_world::kind_of(&scene.scene) == SceneKind::Mesh {
+        return automatic_cells(&scene, smallest_hole, &out, quiet);
     }
     let size = size.unwrap_or(50.0);
     // Check the cheap arguments before loading anything.
@@ -55,6 +57,35 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         } else {
             ": inside buildings"
         },
+        out.display()
+    );
+    Ok(())
+}
+
+/// `cells LEVEL.obj -o cells.json`: the automatic cells of a mesh level as boxes.
+fn automatic_cells(
+    scene: &crate::cli::SceneArg,
+    smallest_hole: Option<f64>,
+    out: &Path,
+    quiet: bool,
+) -> anyhow::Result<()> {
+    let world = open_world(scene, smallest_hole, Standing::default())?;
+    let spinner = crate::common::progress(1, quiet, "voxels, cells, portals, PVS of every cell");
+    let cut = world.cut(false)?;
+    spinner.finish_and_clear();
+    print_warnings(&cut.warnings, quiet);
+    let boxes = cut.auto.cell_boxes();
+    write_atomic(out, &serde_json::to_vec(&boxes)?)?;
+    let r = &cut.auto.report;
+    println!(
+        "{} automatic cells ({} portals; voxels {:?} of {:.3}: {} surface, {} air, {} solid) → {}",
+        r.cells,
+        r.portals,
+        r.grid,
+        r.smallest_hole,
+        r.voxels.surface,
+        r.voxels.air,
+        r.voxels.solid,
         out.display()
     );
     Ok(())

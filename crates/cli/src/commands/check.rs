@@ -1,13 +1,13 @@
 //! `sightline check`: a method's PVS against the ground truth on many cells.
 
 use crate::cli::Command;
-use crate::common::{load_scene, method_options, print_json, progress};
+use crate::common::{method_options, open_world, print_json, print_warnings, progress};
 use anyhow::{bail, Context};
-use sightline_core::check::{check_cells, report_json, street_cells, Clearance, TruthOptions};
+use sightline_core::check::{report_json, street_cells, Clearance};
 use sightline_geom::ViewCell;
 use sightline_methods::{create, VisibilityMethod};
 use sightline_pvs::{PvsFile, StoredPvs};
-use std::sync::Arc;
+use sightline_world::{Evidence, SceneKind, Standing};
 
 /// Side of the cells picked when `--cells` is a number (metres).
 const AUTO_CELL_M: f64 = 10.0;
@@ -66,62 +66,46 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
     else {
         bail!("internal: `check` called with another command");
     };
-    let mesh = crate::commands::mesh::is_mesh(&scene.scene);
-    let volumetric = sightline_core::Method::Volumetric.name();
-    if mesh && pvs.is_none() && method.as_deref().is_none_or(|m| m == volumetric) {
-        let k = count_arg(
-            cells.as_deref(),
-            "on a mesh level, --cells is a number of walkable viewcells to judge",
-        )?;
-        let standing = crate::commands::mesh::Standing {
-            eye_height,
-            spawns: spawn,
-            view_volumes,
-        };
-        return crate::commands::mesh::check_volumetric(
+    let kind = sightline_world::kind_of(&scene.scene);
+    let standing = Standing {
+        eye_height,
+        spawns: spawn,
+        view_volumes,
+    };
+    // A .pvs file is judged on its cells; else a level is judged on its own cells with
+    // the method named, or its default (a mesh level's walkable viewcells).
+    let level_method = match (&pvs, method.as_deref()) {
+        (Some(_), _) => None,
+        (None, None) if kind == SceneKind::Mesh => Some(sightline_world::default_method(kind)),
+        (None, None) => None,
+        (None, Some(name)) => {
+            let m = sightline_world::resolve(kind, &scene.scene, Some(name))?;
+            Some(m).filter(|&m| sightline_world::on_level_cells(m))
+        }
+    };
+    if let Some(m) = level_method {
+        return check_level(
             &scene,
+            m,
+            &cells,
+            reference.is_some(),
             smallest_hole,
-            &standing,
-            k,
+            standing,
             json,
             quiet,
         );
     }
-    if eye_height.is_some() || !spawn.is_empty() || view_volumes.is_some() {
+    if standing.is_set() {
         bail!("--eye-height, --spawn and --view-volumes set the walkable viewcells of a mesh level (.obj, .gltf, .glb) with --method volumetric");
-    }
-    if let Some(full) = method
-        .as_deref()
-        .and_then(|m| crate::commands::mesh::portal_mode(&scene.scene, m))
-    {
-        if reference.is_some() {
-            bail!("--reference vis needs a .bsp level: a mesh level carries no reference PVS");
-        }
-        let k = count_arg(
-            cells.as_deref(),
-            "on a mesh level, --cells is a number of automatic cells to judge",
-        )?;
-        return crate::commands::mesh::check(&scene, full, smallest_hole, k, json, quiet);
     }
     if smallest_hole.is_some() {
         bail!("--smallest-hole sets the automatic cells of a mesh level (.obj, .gltf, .glb) with --method portals or portals-fast");
     }
-    if let Some(mode) = method
-        .as_deref()
-        .map(|m| crate::commands::bsp::portal_mode(&scene.scene, m))
-        .transpose()?
-        .flatten()
-    {
-        let k = count_arg(
-            cells.as_deref(),
-            "on a .bsp level, --cells is a number of source leaves",
-        )?;
-        return crate::commands::bsp::check(&scene.scene, mode, k, json, quiet);
-    }
     if reference.is_some() {
         bail!("--reference vis compares a .bsp level's portal PVS with its own vis: it needs a .bsp and --method portals or portals-fast");
     }
-    let sc = Arc::new(load_scene(&scene)?);
+    let world = open_world(&scene, None, Standing::default())?;
+    let sc = world.scene().clone();
     let (m, cells): (Box<dyn VisibilityMethod>, Vec<ViewCell>) = if let Some(file) = pvs {
         if sweep || planes.is_some() {
             bail!("--sweep and --planes are options of --method ext-proj, not of a .pvs file");
@@ -156,11 +140,12 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         (m, cells)
     };
     let pb = progress(cells.len() as u64, quiet, "checking cells");
-    let report = check_cells(&sc, m.as_ref(), &cells, &TruthOptions::default(), &|| {
-        pb.inc(1)
-    })?;
+    let judgement = world.judge_boxes(m.as_ref(), &cells, &|| pb.inc(1))?;
     pb.finish_and_clear();
-    let json_report = report_json(&report, m.as_ref());
+    let Evidence::Boxes(report) = &judgement.evidence else {
+        bail!("internal: boxes judged without their report");
+    };
+    let json_report = report_json(report, m.as_ref());
     if json {
         print_json(&json_report)?;
     } else {
@@ -180,12 +165,129 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
             println!("missed: {x}");
         }
     }
-    if m.is_conservative() && report.missed > 0 {
-        bail!(
-            "method {} missed {} visible object(s) — a conservativeness bug (witnesses above)",
-            report.method,
-            report.missed
-        );
+    judgement.verdict()
+}
+
+/// `check LEVEL --method M` with a method on the level's own cells: `--cells K` source
+/// leaves of a BSP level (against its `vis` and the ray oracle), automatic cells or
+/// walkable viewcells of a mesh level (against the truth sampled in their free space).
+#[allow(clippy::too_many_arguments)]
+fn check_level(
+    scene: &crate::cli::SceneArg,
+    m: sightline_core::Method,
+    cells: &Option<String>,
+    reference: bool,
+    smallest_hole: Option<f64>,
+    standing: Standing,
+    json: bool,
+    quiet: bool,
+) -> anyhow::Result<()> {
+    use sightline_core::Method;
+    let kind = sightline_world::kind_of(&scene.scene);
+    let what = match (kind, m) {
+        (SceneKind::Bsp, _) => "on a .bsp level, --cells is a number of source leaves",
+        (_, Method::Volumetric) => {
+            "on a mesh level, --cells is a number of walkable viewcells to judge"
+        }
+        _ => "on a mesh level, --cells is a number of automatic cells to judge",
+    };
+    if m != Method::Volumetric && standing.is_set() {
+        bail!("--eye-height, --spawn and --view-volumes set the walkable viewcells of a mesh level (.obj, .gltf, .glb) with --method volumetric");
     }
-    Ok(())
+    if kind == SceneKind::Mesh && reference {
+        bail!("--reference vis needs a .bsp level: a mesh level carries no reference PVS");
+    }
+    if kind == SceneKind::Bsp && smallest_hole.is_some() {
+        bail!("--smallest-hole sets the automatic cells of a mesh level (.obj, .gltf, .glb) with --method portals or portals-fast");
+    }
+    let k = count_arg(cells.as_deref(), what)?;
+    let world = open_world(scene, smallest_hole, standing)?;
+    let spinner = progress(1, quiet, "cells, PVS, then the ground truth");
+    let (judgement, level) = world.judge(m, k)?;
+    spinner.finish_and_clear();
+    let name = m.name();
+    match (&judgement.evidence, level) {
+        (Evidence::Leaves(r), _) => {
+            if json {
+                print_json(r)?;
+            } else {
+                println!(
+                    "{}: {} leaves, {} portals; Σ|PVS| {} leaves = {:.3} × vis ({}), {} faces = {:.3} × the faces of vis's visible leaves ({})",
+                    r.mode,
+                    r.visleafs,
+                    r.portals,
+                    r.leaves_ours,
+                    r.leaves_ratio(),
+                    r.leaves_reference,
+                    r.faces_ours,
+                    r.faces_ratio(),
+                    r.faces_reference,
+                );
+                println!(
+                    "oracle from {} source leaves: missed {} leaf pairs; pairs vis has and we lack: {} ({} with a clear segment); {:.1} s",
+                    r.sources, r.missed_pairs, r.reference_only_pairs, r.reference_only_clear, r.seconds
+                );
+            }
+        }
+        (Evidence::Cells(judged), Some(level)) => {
+            print_warnings(&level.cut.warnings, quiet);
+            let viewcells = level.eye_height.is_some();
+            let mut report = serde_json::json!({
+                "method": name,
+                "clusters": level.clusters,
+                "judged": judgement.judged,
+                "missed": judgement.missed,
+                "over_median": judgement.over_median,
+                "culled_median": judgement.culled_median,
+                "seconds_pvs": level.seconds_pvs,
+                "seconds_truth": level.seconds_truth,
+                "judged_cells": judged,
+            });
+            if let Some(eye) = level.eye_height {
+                report["viewcells"] = level.cells.into();
+                report["eye_height"] = eye.into();
+            } else {
+                report["cells"] = level.cells.into();
+                report["leak"] = level
+                    .cut
+                    .auto
+                    .report
+                    .leak
+                    .as_ref()
+                    .map(|l| serde_json::json!({"inside": l.inside, "void": l.border}))
+                    .into();
+            }
+            if json {
+                print_json(&report)?;
+            } else {
+                let (cells, cell, pvs) = if viewcells {
+                    ("walkable viewcells", "viewcell", "PVS")
+                } else {
+                    ("cells", "cell", "PVS of every cell")
+                };
+                println!(
+                    "{name}: {} {cells}, {} judged, missed {}, PVS / truth median {:.2}, median {cell} culls {:.1} % of {} clusters ({pvs} {:.1} s, truth {:.1} s)",
+                    level.cells,
+                    judgement.judged,
+                    judgement.missed,
+                    judgement.over_median,
+                    100.0 * judgement.culled_median,
+                    level.clusters,
+                    level.seconds_pvs,
+                    level.seconds_truth
+                );
+                for w in &judgement.witnesses {
+                    println!(
+                        "missed: cluster {} of {cell} {} seen from {:?} along {:?}",
+                        w.id,
+                        w.cell,
+                        w.viewpoint.unwrap_or_default(),
+                        w.direction.unwrap_or_default()
+                    );
+                }
+            }
+        }
+        _ => bail!("internal: a level judged without its figures"),
+    }
+    judgement.verdict()
 }

@@ -12,19 +12,19 @@
 //!   the file's own y-up frame; node `extras` hold `cluster`, `source`, `source_name`,
 //!   the asset's `extras.sightline` the level's fingerprint (a `.pvs` header's).
 //!
-//! Cluster ids come from [`mesh::cluster_level`], as for `build`, `check` and `serve`:
+//! Cluster ids come from [`sightline_world::World::clusters`], as for `build`, `check` and `serve`:
 //! with the same `--smallest-hole` (or `--pvs L.pvs`, which reads it from the file and
 //! checks the fingerprint), the ids are the `.pvs`'s.
 
-use super::mesh;
 use crate::cli::{Command, SceneArg};
-use crate::common::{load_scene, print_json};
+use crate::common::{open_world, print_json};
 use anyhow::Context;
 use serde::Serialize;
 use sightline_geom::{DVec3, ViewCell};
 use sightline_scene::clusters::Clustered;
 use sightline_scene::export::glb::{scene_glb, GlbNode};
 use sightline_scene::{Mesh, Object, Scene};
+use sightline_world::{SceneKind, Standing, World};
 use std::path::Path;
 
 /// One source object of the level.
@@ -77,12 +77,13 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         None => None,
         Some(p) => Some(output_format(p)?),
     };
-    let (raw, clustered, hole) = clustered_level(&scene, smallest_hole, pvs.as_deref())?;
-    let listing = listing(&scene, &raw, &clustered, hole)?;
+    let (world, clustered, hole) = clustered_level(&scene, smallest_hole, pvs.as_deref())?;
+    let raw: &Scene = world.scene();
+    let listing = listing(&scene, raw, &clustered, hole)?;
     if let (Some(path), Some(format)) = (&out, format) {
         let bytes = match format {
             Format::Json => serde_json::to_vec_pretty(&listing)?,
-            Format::Glb => glb(&raw, &clustered, &listing)?,
+            Format::Glb => glb(raw, &clustered, &listing)?,
         };
         crate::common::write_atomic(path, &bytes)
             .with_context(|| format!("cannot write {}", path.display()))?;
@@ -143,13 +144,14 @@ fn clustered_level(
     scene: &SceneArg,
     smallest_hole: Option<f64>,
     pvs: Option<&Path>,
-) -> anyhow::Result<(Scene, Clustered, f64)> {
+) -> anyhow::Result<(World, Clustered, f64)> {
     anyhow::ensure!(
-        mesh::is_mesh(&scene.scene),
+        sightline_world::kind_of(&scene.scene) == SceneKind::Mesh,
         "{}: clusters are cut from mesh levels (.obj, .gltf, .glb)",
         scene.scene.display()
     );
-    let raw = load_scene(scene)?;
+    let world = open_world(scene, smallest_hole, Standing::default())?;
+    let raw = world.scene();
     if let Some(w) = raw.warnings.iter().find(|w| w.kind == "skipped-feature") {
         anyhow::bail!(
             "{}: the importer skipped an object ({}): triangle indices would not match the file's faces; repair it",
@@ -161,7 +163,7 @@ fn clustered_level(
         Some(p) => {
             let file = sightline_pvs::PvsFile::open(p)
                 .with_context(|| format!("cannot open {}", p.display()))?;
-            let clustered = mesh::clustered_for(scene, &file)?;
+            let clustered = world.clustered_for(&file)?;
             anyhow::ensure!(
                 file.header().fingerprint == clustered.scene.fingerprint(),
                 "{} was not built from {} (fingerprints differ): its cluster ids are another level's",
@@ -172,13 +174,13 @@ fn clustered_level(
             (clustered, hole)
         }
         None => {
-            let opts = mesh::options(smallest_hole, false)?;
-            let hole = level_hole(&raw, &opts)
+            let opts = world.cluster_options(smallest_hole)?;
+            let hole = level_hole(raw, &opts)
                 .with_context(|| format!("cannot cluster {}", scene.scene.display()))?;
-            (mesh::cluster_level(&raw, &opts), hole)
+            (world.clusters(&opts), hole)
         }
     };
-    Ok((raw, clustered, hole))
+    Ok((world, clustered, hole))
 }
 
 fn param(file: &sightline_pvs::PvsFile, key: &str) -> Option<f64> {
@@ -252,7 +254,7 @@ fn listing(
             }
         })
         .collect();
-    let opts = mesh::options(Some(hole).filter(|h| h.is_finite()), false)?;
+    let opts = sightline_world::cluster_options(Some(hole).filter(|h| h.is_finite()))?;
     Ok(Listing {
         level: scene.scene.display().to_string(),
         fingerprint: format!("{:016x}", clustered.scene.fingerprint()),

@@ -1,4 +1,4 @@
-//! `sightline frames`: from-point occlusion culling along a camera path (SPEC §11), with
+//! `sightline frames`: from-point occlusion culling along a camera path (`docs/culling.md`), with
 //! optional two-level culling inside the PVS of the eye's cell.
 
 use crate::cli::Command;

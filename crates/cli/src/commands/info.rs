@@ -1,27 +1,25 @@
 //! `sightline info SCENE [--json]`: counts, bounds and warnings.
 
 use crate::cli::Command;
-use crate::common::{load_scene, print_json};
+use crate::common::{open_world, print_json};
+use sightline_world::{BspInfo, Standing};
 
 pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
     let Command::Info { scene: arg, json } = cmd else {
         anyhow::bail!("internal: info called with another command");
     };
-    let scene = load_scene(&arg)?;
+    let world = open_world(&arg, None, Standing::default())?;
+    let scene = world.scene();
     let b = scene.bounds;
     let info = scene.info(arg.scene.display().to_string());
-    let bsp = if super::bsp::is_bsp(&arg.scene) {
-        Some(super::bsp::info(&arg.scene)?)
-    } else {
-        None
-    };
+    let bsp = world.bsp_info()?;
     if json {
         #[derive(serde::Serialize)]
         struct WithBsp<'a, T: serde::Serialize> {
             #[serde(flatten)]
             info: &'a T,
             #[serde(skip_serializing_if = "Option::is_none")]
-            bsp: Option<&'a super::bsp::BspInfo>,
+            bsp: Option<&'a BspInfo>,
         }
         return print_json(&WithBsp {
             info: &info,

@@ -67,10 +67,11 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
     else {
         bail!("internal: `map` called with another command");
     };
-    if super::bsp::is_bsp(&scene.scene) {
-        let name = method.as_deref().unwrap_or("portals");
-        let Some(mode) = super::bsp::portal_mode(&scene.scene, name)? else {
-            bail!("map of a BSP level takes --method portals or portals-fast, not {name}");
+    let kind = sightline_world::kind_of(&scene.scene);
+    if kind == sightline_world::SceneKind::Bsp {
+        let m = sightline_world::resolve(kind, &scene.scene, method.as_deref())?;
+        let Some(mode) = sightline_world::portal_mode(m) else {
+            bail!("map of a BSP level takes --method portals or portals-fast, not {m}");
         };
         let Some(at) = at else {
             bail!("map of a BSP level takes --at X,Y,Z (the leaf holding the point)");

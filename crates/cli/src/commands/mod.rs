@@ -2,7 +2,6 @@
 //! `Command` variant.
 
 mod bench;
-mod bsp;
 mod bsp_map;
 mod build;
 mod cells;
@@ -14,7 +13,6 @@ mod gameplay;
 mod generate;
 mod info;
 mod map;
-pub(crate) mod mesh;
 mod pvs;
 mod serve;
 mod tiles;

@@ -1,21 +1,9 @@
-//! `sightline pvs`: the PVS of one viewcell with one method.
+//! `sightline pvs`: the PVS of one viewcell (`--cell`) or of the level's cell holding a
+//! point (`--at`) with one method, on any scene ([`sightline_world::World`]).
 
-use crate::cli::{Command, SceneArg};
-use crate::common::{load_scene, method_options, print_json};
-use serde::Serialize;
-use sightline_geom::ViewCell;
-use sightline_methods::{create, MethodOptions};
-use std::sync::Arc;
-use std::time::Instant;
-
-#[derive(Serialize)]
-struct PvsReport<'a> {
-    method: &'a str,
-    cell: ViewCell,
-    objects: usize,
-    visible: Vec<u32>,
-    seconds: f64,
-}
+use crate::cli::Command;
+use crate::common::{method_options, open_world, print_json};
+use sightline_world::Standing;
 
 pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
     let Command::Pvs {
@@ -34,53 +22,48 @@ pub fn run(cmd: Command, _quiet: bool) -> anyhow::Result<()> {
         unreachable!("dispatched by commands::run")
     };
     let opts = method_options(&method, resolution, sweep, planes, &set)?;
-    if let Some(full) = crate::commands::mesh::portal_mode(&scene.scene, &method) {
-        return crate::commands::mesh::pvs(&scene, full, smallest_hole, cell, at, json);
-    }
-    if let Some(mode) = crate::commands::bsp::portal_mode(&scene.scene, &method)? {
-        return crate::commands::bsp::pvs(&scene.scene, mode, cell, at, json);
-    }
-    if at.is_some() {
+    // The method against the kind before loading anything.
+    let kind = sightline_world::kind_of(&scene.scene);
+    let m = sightline_world::resolve(kind, &scene.scene, Some(&method))?;
+    if at.is_some() && sightline_world::portal_mode(m).is_none() {
         anyhow::bail!(
             "--at answers for the leaf holding a point: it needs a .bsp or mesh level (.obj, .gltf, .glb) and --method portals or portals-fast"
         );
     }
-    let Some(cell) = cell else {
-        anyhow::bail!("--cell is required");
-    };
-    pvs(&scene, &cell, &method, &opts, json)
-}
-
-fn pvs(
-    scene_arg: &SceneArg,
-    cell: &ViewCell,
-    method: &str,
-    opts: &MethodOptions,
-    json: bool,
-) -> anyhow::Result<()> {
-    let scene = Arc::new(load_scene(scene_arg)?);
-    let m = create(method, scene.clone(), opts)?;
-    let t = Instant::now();
-    let visible = m.pvs(cell)?;
-    let seconds = t.elapsed().as_secs_f64();
-    let report = PvsReport {
-        method: m.name(),
-        cell: *cell,
-        objects: scene.objects.len(),
-        visible,
-        seconds,
+    let world = open_world(&scene, smallest_hole, Standing::default())?;
+    let answer = match (at, cell) {
+        (Some(p), _) => world.pvs_at(m, p)?,
+        (None, Some(cell)) => world.pvs_of(m, &cell, &opts)?,
+        (None, None) => anyhow::bail!("give --at X,Y,Z or --cell X0,Y0,Z0,X1,Y1,Z1"),
     };
     if json {
-        print_json(&report)
-    } else {
-        println!(
-            "{}: {} of {} objects potentially visible from {} ({:.1} ms)",
-            report.method,
-            report.visible.len(),
-            report.objects,
-            report.cell,
-            seconds * 1e3
-        );
-        Ok(())
+        return print_json(&answer);
     }
+    let n = answer.visible.len();
+    let from = answer.cell.map_or(String::new(), |c| c.to_string());
+    match (&answer.visible_sources, answer.leaf, answer.visleafs) {
+        (Some(sources), _, _) => println!(
+            "{}: {n} of {} clusters ({} of {} source objects) potentially visible from {from} ({:.1} s)",
+            answer.method,
+            answer.objects,
+            sources.len(),
+            answer.sources.unwrap_or(0),
+            answer.seconds
+        ),
+        (None, Some(leaf), Some(visleafs)) => println!(
+            "{}: leaf {leaf}: {n} of {} faces and {} of {visleafs} leaves potentially visible ({:.1} ms)",
+            answer.method,
+            answer.objects,
+            answer.visible_leaves.as_ref().map_or(0, Vec::len),
+            answer.seconds * 1e3
+        ),
+        _ => println!(
+            "{}: {n} of {} {} potentially visible from {from} ({:.1} ms)",
+            answer.method,
+            answer.objects,
+            answer.unit(),
+            answer.seconds * 1e3
+        ),
+    }
+    Ok(())
 }

@@ -8,7 +8,6 @@
 mod level;
 
 use crate::cli::{Command, SceneArg};
-use crate::commands::{bsp, mesh};
 use crate::common::load_scene;
 use anyhow::{bail, Context};
 use sightline_core::Method;
@@ -18,6 +17,7 @@ use sightline_server::cache::CacheConfig;
 use sightline_server::grid::CellGrid;
 use sightline_server::source::{FileSource, OnlineSource, PvsSource, SharedSource};
 use sightline_server::{Server, ServerConfig, ViewSettings};
+use sightline_world::SceneKind;
 use std::io::Write;
 use std::path::Path;
 use std::sync::Arc;
@@ -58,25 +58,18 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
     }
     let pvs = pvs.or(pvs_flag);
     let path = &scene_arg.scene;
-    let is_level = bsp::is_bsp(path) || mesh::is_mesh(path);
+    let kind = sightline_world::kind_of(path);
+    let is_level = kind != SceneKind::City;
     // A level is served on its own cells unless a city method is asked for explicitly.
     let level_mode = match method.as_deref() {
         None => is_level,
         Some(m) => {
-            let portal = matches!(
-                m.parse(),
-                Ok(Method::Portals | Method::PortalsFast | Method::Volumetric)
-            );
-            is_level && (portal || pvs.is_some())
+            let on_cells = m.parse().is_ok_and(sightline_world::on_level_cells);
+            is_level && (on_cells || pvs.is_some())
         }
     };
+    let default = sightline_world::serving_method(kind).name();
     let served = if level_mode {
-        // A mesh level's default is its walkable viewcells (as `build`).
-        let default = if mesh::is_mesh(path) {
-            Method::Volumetric.name()
-        } else {
-            Method::PortalsFast.name()
-        };
         let method = method.as_deref().unwrap_or(default);
         level::prepare(
             &scene_arg,
@@ -91,7 +84,7 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
             &scene_arg,
             pvs.as_deref(),
             cell_size,
-            method.as_deref().unwrap_or("dual-ray"),
+            method.as_deref().unwrap_or(default),
             resolution,
         )?
     };

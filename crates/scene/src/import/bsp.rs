@@ -1,6 +1,6 @@
 //! Quake BSP (version 29) importer: the compiled level's tree (planes, nodes, leaves),
 //! its world faces as polygons, and its visibility lump — the *reference* leaf PVS that
-//! id's `vis` computed (SPEC §11). The 32-bit variants of large modern maps are read
+//! id's `vis` computed (`docs/methods/portals.md`). The 32-bit variants of large modern maps are read
 //! too: `BSP2` (float node and leaf bounds) and `2PSB` (short bounds), whose nodes,
 //! leaves, faces, edges and marksurfaces hold 32-bit indices (same lumps, same order).
 //!

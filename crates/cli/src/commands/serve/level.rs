@@ -15,14 +15,15 @@
 
 use super::Served;
 use crate::cli::SceneArg;
-use crate::commands::{bsp, mesh};
+use crate::common::{open_world, print_warnings};
 use anyhow::{bail, Context};
 use sightline_core::Method;
 use sightline_geom::DVec3;
-use sightline_portals::Mode;
 use sightline_pvs::PvsFile;
+use sightline_scene::Scene;
 use sightline_server::source::{FileSource, PvsSource};
 use sightline_server::ViewSettings;
+use sightline_world::{SceneKind, Standing, World};
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
@@ -42,10 +43,15 @@ pub(crate) fn prepare(
     eye_height: Option<f64>,
     quiet: bool,
 ) -> anyhow::Result<Served> {
-    if bsp::is_bsp(&scene.scene) {
-        bsp_level(&scene.scene, pvs, method)
+    let standing = Standing {
+        eye_height,
+        ..Standing::default()
+    };
+    let world = open_world(scene, smallest_hole, standing)?;
+    if world.kind() == SceneKind::Bsp {
+        bsp_level(&world, pvs, method, quiet)
     } else {
-        mesh_level(scene, pvs, method, smallest_hole, eye_height, quiet)
+        mesh_level(&world, pvs, method, quiet)
     }
 }
 
@@ -53,26 +59,54 @@ fn open(path: &Path) -> anyhow::Result<PvsFile> {
     PvsFile::open(path).with_context(|| format!("cannot open {}", path.display()))
 }
 
-fn bsp_level(path: &Path, pvs: Option<&Path>, method: &str) -> anyhow::Result<Served> {
-    let level = bsp::load(path)?;
-    let scene = Arc::new(level.to_scene());
+/// The level's `.pvs` built in memory with `method` (a method on the level's cells):
+/// the file, the served objects, and (method, bytes) for the description.
+fn build_in_memory(
+    world: &World,
+    method: &str,
+    quiet: bool,
+) -> anyhow::Result<Option<(PvsFile, Scene, &'static str, usize)>> {
+    let Some(m) = method
+        .parse::<Method>()
+        .ok()
+        .filter(|&m| sightline_world::on_level_cells(m) && m.works_on(world.kind()))
+    else {
+        return Ok(None);
+    };
+    let enc = world.encode(m)?;
+    if let Some(f) = &enc.mesh {
+        print_warnings(&f.warnings, quiet);
+    }
+    let n = enc.bytes.len();
+    Ok(Some((
+        PvsFile::from_bytes(enc.bytes)?,
+        enc.scene,
+        m.name(),
+        n,
+    )))
+}
+
+fn bsp_level(
+    world: &World,
+    pvs: Option<&Path>,
+    method: &str,
+    quiet: bool,
+) -> anyhow::Result<Served> {
+    let path = world.path();
     let t = Instant::now();
+    let scene = world.scene().clone();
     let (file, built) = match pvs {
         Some(p) => (open(p)?, None),
         None => {
-            let Some(mode) = bsp::portal_mode(path, method)? else {
+            let Some((file, _, m, n)) = build_in_memory(world, method, quiet)? else {
                 bail!("a .bsp level is served with its PVS built by portals or portals-fast (or --pvs L.pvs), not '{method}'");
             };
-            let (bytes, _) = bsp::encode(&level, mode)
-                .with_context(|| format!("cannot build the PVS of {}", path.display()))?;
-            let n = bytes.len();
-            (PvsFile::from_bytes(bytes)?, Some((mode, n)))
+            (file, Some((m, n)))
         }
     };
     let src = source(file, &scene, pvs, built.is_some())?;
-    let start = std::fs::read(path)
-        .ok()
-        .and_then(|b| sightline_scene::import::bsp::player_start(&b))
+    let start = world
+        .player_start()
         .map(|o| DVec3::new(o[0], o[1], o[2] + BSP_EYE_ABOVE_ORIGIN))
         .filter(|p| src.locate(*p).is_ok());
     let start = start.or_else(|| largest_cell_centre(&src));
@@ -81,13 +115,7 @@ fn bsp_level(path: &Path, pvs: Option<&Path>, method: &str) -> anyhow::Result<Se
         pvs,
         &src,
         "leaves (convex cells)",
-        built.map(|(mode, n)| {
-            let m = match mode {
-                Mode::Full => "portals",
-                Mode::Fast => "portals-fast",
-            };
-            (m, n, t.elapsed().as_secs_f64())
-        }),
+        built.map(|(m, n)| (m, n, t.elapsed().as_secs_f64())),
     );
     Ok(Served {
         scene,
@@ -101,46 +129,24 @@ fn bsp_level(path: &Path, pvs: Option<&Path>, method: &str) -> anyhow::Result<Se
 }
 
 fn mesh_level(
-    scene: &SceneArg,
+    world: &World,
     pvs: Option<&Path>,
     method: &str,
-    smallest_hole: Option<f64>,
-    eye_height: Option<f64>,
     quiet: bool,
 ) -> anyhow::Result<Served> {
-    let path = &scene.scene;
+    let path = world.path();
     let t = Instant::now();
-    let (file, clustered, built) = match pvs {
+    let (file, served, built) = match pvs {
         Some(p) => {
             let file = open(p)?;
-            let clustered = mesh::clustered_for(scene, &file)?;
-            (file, clustered, None)
-        }
-        None if method == Method::Volumetric.name() => {
-            let standing = mesh::Standing {
-                eye_height,
-                ..Default::default()
-            };
-            let (level, _) = mesh::encode_volumetric(scene, smallest_hole, &standing, quiet)?;
-            let n = level.bytes.len();
-            (
-                PvsFile::from_bytes(level.bytes)?,
-                level.clustered,
-                Some((Method::Volumetric.name(), n)),
-            )
+            let clustered = world.clustered_for(&file)?;
+            (file, clustered.scene, None)
         }
         None => {
-            let Some(full) = mesh::portal_mode(path, method) else {
+            let Some((file, scene, m, n)) = build_in_memory(world, method, quiet)? else {
                 bail!("a mesh level is served with its PVS built by volumetric, portals or portals-fast (or --pvs L.pvs), not '{method}'");
             };
-            let level = mesh::encode(scene, full, smallest_hole, quiet)?;
-            let n = level.bytes.len();
-            let m = if full { "portals" } else { "portals-fast" };
-            (
-                PvsFile::from_bytes(level.bytes)?,
-                level.clustered,
-                Some((m, n)),
-            )
+            (file, scene, Some((m, n)))
         }
     };
     let param = |name: &str| {
@@ -156,7 +162,7 @@ fn mesh_level(
     let walk_eye = param("eye_height");
     let walkable = param("viewcells").map_or(0, |n| n as usize);
     let hole = param("smallest_hole");
-    let scene = Arc::new(clustered.scene);
+    let scene = Arc::new(served);
     let src = source(file, &scene, pvs, built.is_some())?;
     let start = match walk_eye.filter(|_| walkable > 0) {
         Some(eye) => largest_floor_eye(&src, walkable, eye),
