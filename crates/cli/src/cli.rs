@@ -390,6 +390,15 @@ pub enum Command {
         /// `indoor`, `meshes`.
         #[arg(long)]
         only: Option<String>,
+        /// Indoor section: run this reference `vis` (ericw-tools) beside `sightline vis`
+        /// on every level, alternating, from the same `.prt` (default: `vis` on `PATH`
+        /// when it is ericw-tools').
+        #[arg(long, value_name = "PATH")]
+        vis_reference: Option<PathBuf>,
+        /// Indoor section beside the reference: start both tools from `DIR/LEVEL.prt`
+        /// when it exists (default: our own portals, written as PRT1).
+        #[arg(long, value_name = "DIR")]
+        vis_prt: Option<PathBuf>,
     },
     /// Serve a scene (and optionally a .pvs) to walkthrough clients.
     #[command(after_help = methods_help())]

@@ -17,6 +17,12 @@
 //! multiple of its input's size; malformed input is a [`PrtError`] naming the line.
 //! `PRT2` (detail clusters) and the `PRT1-AM` / `PRT1-Q3` variants are recognized and
 //! refused with a clear error.
+//!
+//! [`prt_from_portals`] and [`Prt::to_text`] write our own portals (from the tree,
+//! [`crate::portalize`]) in the same format, so that Quake's `vis` (ericw-tools) and
+//! ours start from the same portals on any level, also one without a shipped `.prt`.
+//! Coordinates are written in Rust's shortest round-trip form (qbsp prints `%f`, six
+//! decimals): reading the text back gives exactly the same `f64`s, planes and leaves.
 
 use crate::portalize::Portal;
 use crate::winding::{Plane, Winding};
@@ -209,6 +215,82 @@ fn parse_portal(n: usize, l: &str, leaves: u32) -> Result<PrtPortal, PrtError> {
     })
 }
 
+impl Prt {
+    /// The file's text: `PRT1`, the leaf and portal counts, one line per portal
+    /// (`n a b (x y z) ...`), each number in its shortest form that reads back exactly.
+    pub fn to_text(&self) -> String {
+        use std::fmt::Write as _;
+        let mut s = format!("PRT1\n{}\n{}\n", self.leaves, self.portals.len());
+        for p in &self.portals {
+            let _ = write!(s, "{} {} {}", p.points.len(), p.leaves[0], p.leaves[1]);
+            for [x, y, z] in &p.points {
+                // `+ 0.0` writes -0 as 0.
+                let _ = write!(s, " ({} {} {})", x + 0.0, y + 0.0, z + 0.0);
+            }
+            s.push('\n');
+        }
+        s
+    }
+}
+
+/// Our portals (between BSP leaves, as [`crate::portalize::portalize`] or
+/// [`portals_for_level`] give them) as a `.prt` of `visleafs` leaves: PRT leaf `k` =
+/// BSP leaf `k + 1`, each winding ordered so that vis's plane points into the first
+/// leaf, i.e. so that the portal reads back with the same plane and leaves. Windings of
+/// zero area (which [`portals_for_level`] drops) are left out. A portal on leaf 0 or
+/// past `visleafs`, or with a point that is not finite or beyond ±10⁶, is an error.
+pub fn prt_from_portals(portals: &[Portal], visleafs: u32) -> Result<Prt, PrtError> {
+    let mut out = Vec::with_capacity(portals.len());
+    for (i, p) in portals.iter().enumerate() {
+        let [a, b] = p.leaves;
+        if a == 0 || b == 0 || a > visleafs || b > visleafs || a == b {
+            return Err(PrtError::Mismatch(format!(
+                "portal {i} joins leaves {a} and {b}, not two of the visleafs 1..={visleafs}"
+            )));
+        }
+        let pts = &p.winding.points;
+        if pts.len() < 3 || pts.len() > MAX_POINTS {
+            continue;
+        }
+        if !pts
+            .iter()
+            .all(|q| q.is_finite() && q.abs().max_element() <= MAX_COORD)
+        {
+            return Err(PrtError::Mismatch(format!(
+                "portal {i} has a point that is not finite or out of range"
+            )));
+        }
+        let newell = newell(pts);
+        if newell.length() < 1e-9 {
+            continue; // zero area: dropped on reading
+        }
+        let mut points: Vec<[f64; 3]> = pts.iter().map(|q| q.to_array()).collect();
+        // Newell's normal points into the second leaf when read (see
+        // `portals_for_level`): make it agree with the plane's, which points into
+        // `leaves[1]`.
+        if newell.dot(p.plane.normal) < 0.0 {
+            points.reverse();
+        }
+        out.push(PrtPortal {
+            points,
+            leaves: [a - 1, b - 1],
+        });
+    }
+    Ok(Prt {
+        leaves: visleafs,
+        portals: out,
+    })
+}
+
+/// Newell's normal of a polygon (twice its area, along its normal).
+fn newell(points: &[DVec3]) -> DVec3 {
+    let mut n = DVec3::ZERO;
+    for (k, a) in points.iter().enumerate() {
+        n += a.cross(points[(k + 1) % points.len()]);
+    }
+    n
+}
+
 /// How far (Quake units) a portal point may lie outside the bounding boxes of its two
 /// leaves (which the BSP stores rounded to integers) before the `.prt` is taken for
 /// another level's.
@@ -250,11 +332,7 @@ pub fn portals_for_level(prt: &Prt, level: &BspLevel) -> Result<Vec<Portal>, Prt
         let points: Vec<DVec3> = p.points.iter().map(|q| DVec3::from(*q)).collect();
         // vis's plane: (p0 - p1) × (p2 - p1) points into the first leaf. Newell's normal
         // (robust to collinear leading points) points the other way for the same order.
-        let mut newell = DVec3::ZERO;
-        for (k, a) in points.iter().enumerate() {
-            let b = points[(k + 1) % points.len()];
-            newell += a.cross(b);
-        }
+        let newell = newell(&points);
         let len = newell.length();
         if len < 1e-9 {
             continue; // zero area: no line passes through it

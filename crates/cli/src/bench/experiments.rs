@@ -1028,6 +1028,8 @@ mod tests {
             mesh_viewcells: Some(2),
             mesh_judged: 1,
             only: None,
+            vis_reference: None,
+            vis_prt: None,
         };
         let dir = std::env::temp_dir().join(format!("sightline-bench-{}", std::process::id()));
         let methods = vec!["dual-ray".to_string(), "dual-ray-exact".to_string()];

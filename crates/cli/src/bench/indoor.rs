@@ -2,11 +2,14 @@
 //! portals, the wall time of the fast bound and of the full flow, peak memory, Σ|PVS|
 //! against the level's own `vis` for leaves and faces, and misses against the ray
 //! oracle — the figures of `check LEVEL.bsp --reference vis`
-//! ([`sightline_portals::reference`]), with the solves timed apart.
+//! ([`sightline_portals::reference`]), with the solves timed apart. With a reference
+//! `vis` (ericw-tools: `bench --vis-reference PATH`, or `vis` on `PATH`), each level is
+//! also run through both tools side by side ([`super::vis_reference`]).
 
 use super::plots::{scatter_chart, Series};
 use super::report::{Report, Table};
 use super::suite::{Suite, NO_REPEAT_MS};
+use super::vis_reference::{side_by_side, Reference, SideBySide, ToolRuns, MAX_REPEATS};
 use anyhow::Context;
 use serde::Serialize;
 use sightline_portals::reference::{compare_sets, leaf_sizes, LeafSizes, VisReport};
@@ -42,6 +45,8 @@ pub struct IndoorRecord {
     pub fast_contains_full: bool,
     /// Per view leaf: our full PVS against the reference (the plot's points).
     pub per_leaf: Vec<LeafSizes>,
+    /// `sightline vis` beside the reference `vis`, when one is given.
+    pub vis_reference: Option<SideBySide>,
 }
 
 /// The `.bsp` files named by `paths`: a file as is, a folder's `*.bsp` sorted by name.
@@ -132,6 +137,7 @@ pub fn measure_level(path: &Path, repeats: usize, sources: usize) -> anyhow::Res
         full: full_report,
         fast: fast_report,
         fast_contains_full,
+        vis_reference: None,
     })
 }
 
@@ -159,6 +165,37 @@ pub fn measure_into(
                     "`portals-fast` does not contain `portals` on {}",
                     r.level
                 ));
+            }
+            let mut r = r;
+            if let Some(vis) = &suite.vis_reference {
+                if !quiet {
+                    eprintln!("bench: indoor {} beside {}", path.display(), vis.display());
+                }
+                let reference = Reference {
+                    vis: vis.clone(),
+                    ours: std::env::current_exe().unwrap_or_else(|_| "sightline".into()),
+                    prt_dir: suite.vis_prt.clone(),
+                    threads: rayon::current_num_threads(),
+                };
+                match side_by_side(path, &reference, suite.timing_repeats, suite.indoor_sources) {
+                    Ok(s) => {
+                        for (who, t) in [
+                            ("sightline vis", &s.ours_full),
+                            ("sightline vis --fast", &s.ours_fast),
+                            ("the reference vis", &s.reference_full),
+                            ("the reference vis -fast", &s.reference_fast),
+                        ] {
+                            if t.misses > 0 {
+                                notes.push(format!(
+                                    "{who} MISSED {} visible leaf pairs on {}",
+                                    t.misses, r.level
+                                ));
+                            }
+                        }
+                        r.vis_reference = Some(s);
+                    }
+                    Err(e) => notes.push(format!("indoor beside vis: {}: {e:#}", path.display())),
+                }
             }
             records.push(r);
         }
@@ -264,6 +301,147 @@ pub fn write_section(
     rep.para(
         "One point per view leaf; below the line y = x our set is smaller than the reference's.",
     );
+    write_side_by_side(records, rep, out)
+}
+
+/// Seconds with two decimals, or `-`.
+fn secs(v: Option<f64>) -> String {
+    v.map_or_else(|| "-".into(), |v| format!("{v:.2}"))
+}
+
+/// Σ of a tool's rows over the shipped Σ; the range when its runs differ.
+fn sum_ratio(s: &SideBySide, t: &ToolRuns) -> String {
+    let (lo, hi) = t.sums();
+    let shipped = s.shipped_sum.max(1) as f64;
+    let (lo, hi) = (
+        format!("{:.4}", lo as f64 / shipped),
+        format!("{:.4}", hi as f64 / shipped),
+    );
+    if lo == hi {
+        format!("{:.4}", s.ratio(t))
+    } else {
+        format!("{lo}–{hi}")
+    }
+}
+
+/// The table and plots of the levels run beside a reference `vis` (nothing without one).
+fn write_side_by_side(
+    records: &[IndoorRecord],
+    rep: &mut Report,
+    out: &Path,
+) -> anyhow::Result<()> {
+    let sides: Vec<(&str, &SideBySide)> = records
+        .iter()
+        .filter_map(|r| Some((r.level.as_str(), r.vis_reference.as_ref()?)))
+        .collect();
+    let Some((_, first)) = sides.first() else {
+        return Ok(());
+    };
+    rep.section("Indoor: beside ericw-tools `vis`");
+    rep.para(&format!(
+        "Per level, in this run on this machine: the reference `vis` (`-threads {t}`) and `sightline vis` (`--threads {t}`, this binary) each on a fresh copy of the level and from the same `.prt` ({prt}), alternating (reference full, ours full, reference `-fast`, ours `--fast`; up to {MAX_REPEATS} rounds as the suite repeats). Wall time is measured by the bench, CPU time (user + system) and peak resident memory by {timer}; times are medians over the rounds, peak memory the largest. Σ is Σ|row| of the rows each tool wrote (read back from the visibility lump) over Σ|row| of the rows the level shipped with (1996), a range when the runs differ. *Misses* are the ray oracle's on the first round's rows: {src} source leaves spread evenly, each against every view leaf its row lacks, 16 random segments per pair (0 is required). *Load* is the one-minute load average before the level's first run → after its last.",
+        t = first.threads,
+        timer = if first.timer == "GNU time" { "GNU `time`" } else { "nothing (no `/usr/bin/time`: wall time only)" },
+        src = first.sources,
+        prt = if first.prt.starts_with("shared") { "`--vis-prt`'s `LEVEL.prt` where it has one: *shared*" } else { "our own portals written as PRT1: *ours (written)*" },
+    ));
+    let mut t = Table::new(&[
+        "level",
+        ".prt (portals)",
+        "rounds",
+        "load",
+        "vis wall s",
+        "ours wall s",
+        "vis CPU s",
+        "ours CPU s",
+        "vis peak MiB",
+        "ours peak MiB",
+        "Σ vis / 1996",
+        "Σ ours / 1996",
+        "misses vis / ours",
+        "vis -fast wall s",
+        "ours --fast wall s",
+        "vis -fast CPU s",
+        "ours --fast CPU s",
+        "Σ fast vis / ours",
+        "misses fast vis / ours",
+    ]);
+    for (level, s) in &sides {
+        let peak = |t: &ToolRuns| {
+            t.peak_mib()
+                .map_or_else(|| "-".into(), |m| format!("{m:.1}"))
+        };
+        t.row(vec![
+            level.to_string(),
+            format!("{} ({})", s.prt, s.portals),
+            s.ours_full.runs.len().to_string(),
+            format!("{:.1} → {:.1}", s.load[0], s.load[1]),
+            format!("{:.2}", s.reference_full.wall_s()),
+            format!("{:.2}", s.ours_full.wall_s()),
+            secs(s.reference_full.cpu_s()),
+            secs(s.ours_full.cpu_s()),
+            peak(&s.reference_full),
+            peak(&s.ours_full),
+            sum_ratio(s, &s.reference_full),
+            sum_ratio(s, &s.ours_full),
+            format!("{} / {}", s.reference_full.misses, s.ours_full.misses),
+            format!("{:.2}", s.reference_fast.wall_s()),
+            format!("{:.2}", s.ours_fast.wall_s()),
+            secs(s.reference_fast.cpu_s()),
+            secs(s.ours_fast.cpu_s()),
+            format!(
+                "{} / {}",
+                sum_ratio(s, &s.reference_fast),
+                sum_ratio(s, &s.ours_fast)
+            ),
+            format!("{} / {}", s.reference_fast.misses, s.ours_fast.misses),
+        ]);
+    }
+    rep.table(&t);
+    let series = |fast: bool| -> Vec<Series> {
+        sides
+            .iter()
+            .map(|(level, s)| {
+                let (a, b) = if fast {
+                    (&s.reference_fast, &s.ours_fast)
+                } else {
+                    (&s.reference_full, &s.ours_full)
+                };
+                Series {
+                    name: level.to_string(),
+                    points: a
+                        .runs
+                        .iter()
+                        .zip(&b.runs)
+                        .map(|(a, b)| (a.wall_s, b.wall_s))
+                        .collect(),
+                }
+            })
+            .collect()
+    };
+    scatter_chart(
+        &out.join("indoor-vis-time.png"),
+        "full vis: wall time, ours against ericw-tools (each round)",
+        "ericw-tools vis, s",
+        "sightline vis, s",
+        &series(false),
+    )?;
+    rep.image(
+        "indoor-vis-time.png",
+        "full vis wall time, ours against ericw-tools",
+    );
+    scatter_chart(
+        &out.join("indoor-vis-fast-time.png"),
+        "fast bound: wall time, ours against ericw-tools -fast (each round)",
+        "ericw-tools vis -fast, s",
+        "sightline vis --fast, s",
+        &series(true),
+    )?;
+    rep.image(
+        "indoor-vis-fast-time.png",
+        "fast bound wall time, ours against ericw-tools",
+    );
+    rep.para("One point per level and round (the pair run one after the other); below the line y = x ours was faster.");
     Ok(())
 }
 

@@ -15,8 +15,10 @@ mod meshes;
 mod plots;
 mod report;
 mod suite;
+mod vis_reference;
 
 pub use experiments::{run, Sections};
 pub use indoor::find_levels;
 pub use meshes::MeshLevel;
 pub use suite::Suite;
+pub use vis_reference::detect_on_path as detect_vis_reference;

@@ -2,6 +2,7 @@
 //! and written into the report.
 
 use serde::Serialize;
+use std::path::PathBuf;
 
 /// A run of one cell longer than this is not repeated: at that length the run-to-run
 /// noise is a few per cent, and repeating the slow methods dominated the suite's time.
@@ -48,6 +49,13 @@ pub struct Suite {
     /// Run only these experiments (`bench --only`; names as in the report's footer,
     /// case-insensitive); all when `None`.
     pub only: Option<Vec<String>>,
+    /// Indoor section: a reference `vis` (ericw-tools) run beside `sightline vis` on
+    /// every level (`bench --vis-reference`, or `vis` on `PATH`); none: against the
+    /// levels' shipped rows only.
+    pub vis_reference: Option<PathBuf>,
+    /// Indoor section beside the reference: a folder of `LEVEL.prt` files both tools
+    /// start from (`--vis-prt`); our own portals, written as PRT1, otherwise.
+    pub vis_prt: Option<PathBuf>,
 }
 
 impl Suite {
@@ -80,6 +88,8 @@ impl Suite {
                 mesh_viewcells: Some(64),
                 mesh_judged: 8,
                 only: None,
+                vis_reference: None,
+                vis_prt: None,
             }),
             "full" => Ok(Suite {
                 name: "full".into(),
@@ -108,6 +118,8 @@ impl Suite {
                 mesh_viewcells: None,
                 mesh_judged: 20,
                 only: None,
+                vis_reference: None,
+                vis_prt: None,
             }),
             other => anyhow::bail!("unknown suite '{other}' (known: quick, full)"),
         }

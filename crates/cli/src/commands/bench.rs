@@ -18,11 +18,15 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         mesh_viewcells,
         out,
         only,
+        vis_reference,
+        vis_prt,
     } = cmd
     else {
         unreachable!("dispatched by commands::run")
     };
     let mut suite = Suite::named(&suite)?;
+    suite.vis_reference = vis_reference.or_else(crate::bench::detect_vis_reference);
+    suite.vis_prt = vis_prt;
     if let Some(n) = mesh_viewcells {
         suite.mesh_viewcells = (n > 0).then_some(n);
     }
