@@ -257,11 +257,16 @@ pub enum Command {
         /// this point `X,Y,Z` (repeat for several; docs/methods/volumetric.md).
         #[arg(long = "spawn", value_parser = parse_point, allow_hyphen_values = true)]
         spawn: Vec<[f64; 3]>,
-        /// Mesh levels with `volumetric`: viewcells from a JSON array of boxes
-        /// `[{"min": [x, y, z], "max": [x, y, z]}, …]` (scene units) instead of the
-        /// walkable floors.
+        /// Mesh levels with `volumetric`: viewcells instead of the walkable floors, from
+        /// a JSON array of boxes `[{"min": [x, y, z], "max": [x, y, z]}, …]` or a mesh
+        /// file (.obj, .gltf, .glb) whose objects' bounding boxes are the volumes (scene
+        /// units).
         #[arg(long)]
         view_volumes: Option<PathBuf>,
+        /// With a mesh file of `--view-volumes`: only its objects (glTF nodes, OBJ
+        /// objects) whose name matches PATTERN (`*` any run, `?` one character).
+        #[arg(long, value_name = "PATTERN")]
+        view_volume_names: Option<String>,
     },
     /// Merge shard .pvs files into one.
     Merge {
@@ -331,9 +336,13 @@ pub enum Command {
         /// point `X,Y,Z` (repeatable; as `build`).
         #[arg(long = "spawn", value_parser = parse_point, allow_hyphen_values = true)]
         spawn: Vec<[f64; 3]>,
-        /// Mesh levels with `volumetric`: the viewcells from a JSON file of boxes (as `build`).
+        /// Mesh levels with `volumetric`: the viewcells from a JSON file of boxes or a
+        /// mesh file of volumes (as `build`).
         #[arg(long)]
         view_volumes: Option<PathBuf>,
+        /// Of a mesh file of `--view-volumes`: the objects whose name matches (as `build`).
+        #[arg(long, value_name = "PATTERN")]
+        view_volume_names: Option<String>,
         #[arg(long)]
         json: bool,
     },

@@ -236,6 +236,59 @@ fn spawn_points_and_view_volumes_set_the_viewcells() {
     assert_eq!(code, 0);
     let q: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(q["free_space"], false, "{q}");
+    // The same volume as a named object of a mesh file (an editor's occlusion area),
+    // beside one the name pattern leaves out: the same file, byte for byte.
+    let volume = |name: &str, x0: f64, x1: f64| {
+        sightline_scene::Object::block(
+            Some(name.into()),
+            sightline_geom::Polygon::rect(
+                sightline_geom::DVec2::new(x0, -2.5),
+                sightline_geom::DVec2::new(x1, -1.0),
+            ),
+            0.2,
+            1.8,
+        )
+    };
+    let volumes = sightline_scene::Scene::from_objects(vec![
+        volume("ViewVolume_A", -5.0, -3.0),
+        volume("Lamp", 2.0, 3.0),
+    ]);
+    let volumes_obj = dir.path().join("volumes.obj");
+    sightline_scene::export::write_obj(&volumes, &mut std::fs::File::create(&volumes_obj).unwrap())
+        .unwrap();
+    let volumes_s = volumes_obj.to_string_lossy().into_owned();
+    let named = dir.path().join("named.pvs").to_string_lossy().into_owned();
+    let (code, _, err) = sightline(&[
+        "build",
+        &obj,
+        "--smallest-hole",
+        "0.5",
+        "--view-volumes",
+        &volumes_s,
+        "--view-volume-names",
+        "ViewVol*_?",
+        "-o",
+        &named,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(viewcells(&err), 1);
+    assert_eq!(std::fs::read(&named).unwrap(), std::fs::read(&vv).unwrap());
+    let (code, _, err) = sightline(&[
+        "build",
+        &obj,
+        "--smallest-hole",
+        "0.5",
+        "--view-volumes",
+        &volumes_s,
+        "-o",
+        &named,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        viewcells(&err),
+        2,
+        "every object of the file without a pattern"
+    );
     // Bad input: one error line, no file.
     std::fs::write(&boxes, r#"[{"min": [1, 1, 1]}]"#).unwrap();
     let bad = dir.path().join("bad.pvs");
@@ -244,6 +297,19 @@ fn spawn_points_and_view_volumes_set_the_viewcells() {
         vec!["--view-volumes", boxes_s.as_str()],
         vec!["--spawn=-4.5,-2,-50"],
         vec!["--spawn=-4.5,-2,0.1", "--view-volumes", boxes_s.as_str()],
+        vec![
+            "--view-volumes",
+            volumes_s.as_str(),
+            "--view-volume-names",
+            "Door*",
+        ],
+        vec!["--view-volume-names", "ViewVolume*"],
+        vec![
+            "--view-volumes",
+            boxes_s.as_str(),
+            "--view-volume-names",
+            "*",
+        ],
     ] {
         let mut a = vec![
             "build",

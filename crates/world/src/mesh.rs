@@ -7,11 +7,11 @@
 use anyhow::Context;
 use sightline_autocells::cells::VoxelBox;
 use sightline_autocells::{default_cluster_size, AutoCells, Options, MAX_CLUSTER_TRIANGLES};
-use sightline_core::{Cell, Method};
+use sightline_core::{Cell, Method, SceneKind};
 use sightline_geom::ViewCell;
 use sightline_scene::clusters::{cluster_scene, Clustered};
 use sightline_scene::Scene;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The default eye height of a viewer on a mesh level: 1.7 (metres), or 3.5 smallest
 /// holes when the voxels are coarser (a level in game units: pandora's 4-unit voxels
@@ -31,15 +31,86 @@ pub struct Standing {
     pub eye_height: Option<f64>,
     /// `--spawn X,Y,Z`: keep the viewcells a walker reaches from these points.
     pub spawns: Vec<[f64; 3]>,
-    /// `--view-volumes FILE.json`: boxes in scene units, used as the viewcells.
+    /// `--view-volumes FILE`: the viewcells, in scene units: a JSON array of boxes, or
+    /// a mesh file (`.obj`, `.gltf`, `.glb`) whose objects' bounding boxes are the
+    /// volumes (as an editor's occlusion areas are placed).
     pub view_volumes: Option<PathBuf>,
+    /// `--view-volume-names PATTERN`: of a mesh file of view volumes, only the objects
+    /// (glTF nodes, OBJ objects) whose name matches (`*` any run, `?` one character).
+    pub view_volume_names: Option<String>,
 }
 
 impl Standing {
     /// Whether anything but the defaults was asked (the flags apply to mesh levels only).
     pub fn is_set(&self) -> bool {
-        self.eye_height.is_some() || !self.spawns.is_empty() || self.view_volumes.is_some()
+        self.eye_height.is_some()
+            || !self.spawns.is_empty()
+            || self.view_volumes.is_some()
+            || self.view_volume_names.is_some()
     }
+}
+
+/// Whether `name` matches the glob `pattern` (`*` any run of characters, `?` one).
+pub fn name_matches(pattern: &str, name: &str) -> bool {
+    let (p, n): (Vec<char>, Vec<char>) = (pattern.chars().collect(), name.chars().collect());
+    // Greedy matching with one backtrack point (the last `*`): linear in practice.
+    let (mut i, mut j, mut star, mut mark) = (0, 0, None, 0);
+    while j < n.len() {
+        if i < p.len() && (p[i] == '?' || p[i] == n[j]) {
+            i += 1;
+            j += 1;
+        } else if i < p.len() && p[i] == '*' {
+            star = Some(i);
+            mark = j;
+            i += 1;
+        } else if let Some(s) = star {
+            i = s + 1;
+            mark += 1;
+            j = mark;
+        } else {
+            return false;
+        }
+    }
+    p[i..].iter().all(|&c| c == '*')
+}
+
+/// The view volumes of `--view-volumes FILE` as `(min, max)` boxes in scene units.
+fn read_view_volumes(
+    path: &Path,
+    names: Option<&str>,
+) -> anyhow::Result<Vec<([f64; 3], [f64; 3])>> {
+    if crate::kind_of(path) == SceneKind::Mesh {
+        let scene = sightline_scene::import::load(path, &Default::default())
+            .with_context(|| format!("cannot load the view volumes {}", path.display()))?;
+        let picked: Vec<([f64; 3], [f64; 3])> = scene
+            .objects
+            .iter()
+            .filter(|o| names.is_none_or(|p| o.name.as_deref().is_some_and(|n| name_matches(p, n))))
+            .map(|o| (o.bounds.min.to_array(), o.bounds.max.to_array()))
+            .collect();
+        anyhow::ensure!(
+            !picked.is_empty(),
+            "{}: no object named like '{}' ({} objects)",
+            path.display(),
+            names.unwrap_or("*"),
+            scene.objects.len()
+        );
+        return Ok(picked);
+    }
+    anyhow::ensure!(
+        names.is_none(),
+        "--view-volume-names picks objects of a mesh file of view volumes (.obj, .gltf, .glb), not of {}",
+        path.display()
+    );
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let volumes: Vec<ViewVolume> = serde_json::from_str(&text).with_context(|| {
+        format!(
+            "{}: expected a JSON array of boxes {{\"min\": [x, y, z], \"max\": [x, y, z]}}, or a mesh file of view volumes",
+            path.display()
+        )
+    })?;
+    Ok(volumes.into_iter().map(|v| (v.min, v.max)).collect())
 }
 
 /// A view volume of `--view-volumes`.
@@ -66,28 +137,25 @@ pub fn walkable_viewcells(
     let g = &auto.voxels.grid;
     let to_voxels =
         |p: [f64; 3]| -> [f64; 3] { std::array::from_fn(|k| (p[k] - g.origin[k]) / g.size) };
+    anyhow::ensure!(
+        standing.view_volume_names.is_none() || standing.view_volumes.is_some(),
+        "--view-volume-names picks objects of the --view-volumes file: give one"
+    );
     if let Some(path) = &standing.view_volumes {
         anyhow::ensure!(
             standing.spawns.is_empty(),
             "--view-volumes gives the viewcells: --spawn has nothing to flood"
         );
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read {}", path.display()))?;
-        let volumes: Vec<ViewVolume> = serde_json::from_str(&text).with_context(|| {
-            format!(
-                "{}: expected a JSON array of boxes {{\"min\": [x, y, z], \"max\": [x, y, z]}}",
-                path.display()
-            )
-        })?;
+        let volumes = read_view_volumes(path, standing.view_volume_names.as_deref())?;
         let mut out = Vec::with_capacity(volumes.len());
-        for (i, v) in volumes.iter().enumerate() {
-            let (lo, hi) = (to_voxels(v.min), to_voxels(v.max));
+        for (i, (min, max)) in volumes.iter().enumerate() {
+            let (lo, hi) = (to_voxels(*min), to_voxels(*max));
             anyhow::ensure!(
                 (0..3).all(|k| lo[k].is_finite() && hi[k].is_finite() && lo[k] <= hi[k]),
                 "{}: view volume {i} is not a box (min {:?}, max {:?})",
                 path.display(),
-                v.min,
-                v.max
+                min,
+                max
             );
             let b = VoxelBox {
                 lo: std::array::from_fn(|k| (lo[k].floor().max(0.0) as usize).min(g.dims[k])),
@@ -355,4 +423,28 @@ pub fn sources_from_params(params: &[(String, String)], visible: &[u32]) -> Opti
     out.sort_unstable();
     out.dedup();
     Some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::name_matches;
+
+    #[test]
+    fn view_volume_names_match_globs() {
+        for (p, n, m) in [
+            ("ViewVolume*", "ViewVolume_hall", true),
+            ("ViewVolume*", "viewvolume_hall", false),
+            ("*", "", true),
+            ("*_?", "area_7", true),
+            ("*_?", "area_77", false),
+            ("a*b*c", "axxbyyc", true),
+            ("a*b*c", "axxbyy", false),
+            ("exact", "exact", true),
+            ("exact", "exactly", false),
+            ("**x", "yyx", true),
+            ("é?", "éa", true),
+        ] {
+            assert_eq!(name_matches(p, n), m, "{p} ~ {n}");
+        }
+    }
 }

@@ -30,11 +30,13 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
             eye_height,
             spawn,
             view_volumes,
+            view_volume_names,
         } => {
             let standing = Standing {
                 eye_height,
                 spawns: spawn,
                 view_volumes,
+                view_volume_names,
             };
             let kind = sightline_world::kind_of(&scene.scene);
             // No --method: the kind's default (a mesh level's walkable viewcells).

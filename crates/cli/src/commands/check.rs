@@ -61,6 +61,7 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         eye_height,
         spawn,
         view_volumes,
+        view_volume_names,
         json,
     } = cmd
     else {
@@ -71,6 +72,7 @@ pub fn run(cmd: Command, quiet: bool) -> anyhow::Result<()> {
         eye_height,
         spawns: spawn,
         view_volumes,
+        view_volume_names,
     };
     // A .pvs file is judged on its cells; else a level is judged on its own cells with
     // the method named, or its default (a mesh level's walkable viewcells).
