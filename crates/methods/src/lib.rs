@@ -67,7 +67,7 @@ pub fn create(
         (Family::Sampled, Options::Sampled(o)) => sampled::create(scene, &o),
         (Family::Baseline, _) => Ok(Box::new(All { scene })),
         (Family::Portals, _) => Err(MethodError::Other(format!(
-            "{m} works on the cells of a level (BSP, mesh): open the scene with sightline_world::World, which prepares it"
+            "{m} works on the cells of levels (BSP, mesh): open the scene with sightline_world::World, which prepares it"
         ))),
         (Family::Volumetric, _) => Err(MethodError::Other(format!(
             "{m} works on mesh levels: open the scene with sightline_world::World, which builds its walkable viewcells"
