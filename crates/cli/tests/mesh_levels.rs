@@ -190,21 +190,19 @@ fn spawn_points_and_view_volumes_set_the_viewcells() {
             .and_then(|n| n.parse().ok())
             .expect("a count")
     };
+    // `build` of the test level into `out` with `extra` flags.
+    let build = |out: &str, extra: &[&str]| {
+        let mut a = vec!["build", obj.as_str(), "--smallest-hole", "0.5", "-o", out];
+        a.extend_from_slice(extra);
+        sightline(&a)
+    };
     let all = dir.path().join("all.pvs").to_string_lossy().into_owned();
-    let (code, _, err) = sightline(&["build", &obj, "--smallest-hole", "0.5", "-o", &all]);
+    let (code, _, err) = build(&all, &[]);
     assert_eq!(code, 0, "{err}");
     let all_cells = viewcells(&err);
     // Every room of the test level is reached from room A: the same viewcells.
     let spawned = dir.path().join("spawn.pvs").to_string_lossy().into_owned();
-    let (code, _, err) = sightline(&[
-        "build",
-        &obj,
-        "--smallest-hole",
-        "0.5",
-        "--spawn=-4.5,-2,0.1",
-        "-o",
-        &spawned,
-    ]);
+    let (code, _, err) = build(&spawned, &["--spawn=-4.5,-2,0.1"]);
     assert_eq!(code, 0, "{err}");
     assert_eq!(viewcells(&err), all_cells);
     let (code, out, _) = sightline(&["query", &spawned, "--at=-4.5,-2,1.7", "--json"]);
@@ -220,16 +218,7 @@ fn spawn_points_and_view_volumes_set_the_viewcells() {
     .unwrap();
     let vv = dir.path().join("vv.pvs").to_string_lossy().into_owned();
     let boxes_s = boxes.to_string_lossy().into_owned();
-    let (code, _, err) = sightline(&[
-        "build",
-        &obj,
-        "--smallest-hole",
-        "0.5",
-        "--view-volumes",
-        &boxes_s,
-        "-o",
-        &vv,
-    ]);
+    let (code, _, err) = build(&vv, &["--view-volumes", &boxes_s]);
     assert_eq!(code, 0, "{err}");
     assert_eq!(viewcells(&err), 1);
     let (code, out, _) = sightline(&["query", &vv, "--at=-4,-2,1", "--json"]);
@@ -258,31 +247,19 @@ fn spawn_points_and_view_volumes_set_the_viewcells() {
         .unwrap();
     let volumes_s = volumes_obj.to_string_lossy().into_owned();
     let named = dir.path().join("named.pvs").to_string_lossy().into_owned();
-    let (code, _, err) = sightline(&[
-        "build",
-        &obj,
-        "--smallest-hole",
-        "0.5",
-        "--view-volumes",
-        &volumes_s,
-        "--view-volume-names",
-        "ViewVol*_?",
-        "-o",
+    let (code, _, err) = build(
         &named,
-    ]);
+        &[
+            "--view-volumes",
+            &volumes_s,
+            "--view-volume-names",
+            "ViewVol*_?",
+        ],
+    );
     assert_eq!(code, 0, "{err}");
     assert_eq!(viewcells(&err), 1);
     assert_eq!(std::fs::read(&named).unwrap(), std::fs::read(&vv).unwrap());
-    let (code, _, err) = sightline(&[
-        "build",
-        &obj,
-        "--smallest-hole",
-        "0.5",
-        "--view-volumes",
-        &volumes_s,
-        "-o",
-        &named,
-    ]);
+    let (code, _, err) = build(&named, &["--view-volumes", &volumes_s]);
     assert_eq!(code, 0, "{err}");
     assert_eq!(
         viewcells(&err),
@@ -311,16 +288,7 @@ fn spawn_points_and_view_volumes_set_the_viewcells() {
             "*",
         ],
     ] {
-        let mut a = vec![
-            "build",
-            obj.as_str(),
-            "--smallest-hole",
-            "0.5",
-            "-o",
-            bad_s.as_str(),
-        ];
-        a.extend(args.iter().copied());
-        let (code, _, err) = sightline(&a);
+        let (code, _, err) = build(&bad_s, &args);
         assert_ne!(code, 0, "{args:?}");
         assert!(
             err.starts_with("error:") && err.trim().lines().count() == 1,

@@ -404,17 +404,24 @@ impl World {
         })
     }
 
-    /// The `.pvs` of the whole level with `m`: every open leaf of a BSP level, every
-    /// automatic cell of a mesh level (`portals`, `portals-fast`), or its walkable
-    /// viewcells then its automatic cells (`volumetric`, with the options' standing).
-    pub fn encode(&self, m: Method) -> anyhow::Result<Encoded> {
+    /// An error unless `m` works on this scene's own cells (`verb`: "is built on",
+    /// "judges").
+    fn ensure_level_method(&self, m: Method, verb: &str) -> anyhow::Result<()> {
         anyhow::ensure!(
             on_level_cells(m) && m.works_on(self.kind),
-            "{} is built on the cells of a level; {} is {}",
+            "{} {verb} the cells of a level; {} is {}",
             m.name(),
             self.path.display(),
             kind_word(self.kind)
         );
+        Ok(())
+    }
+
+    /// The `.pvs` of the whole level with `m`: every open leaf of a BSP level, every
+    /// automatic cell of a mesh level (`portals`, `portals-fast`), or its walkable
+    /// viewcells then its automatic cells (`volumetric`, with the options' standing).
+    pub fn encode(&self, m: Method) -> anyhow::Result<Encoded> {
+        self.ensure_level_method(m, "is built on")?;
         if let Some(level) = &self.bsp {
             let mode = portal_mode(m).context("a BSP level is built with a portal method")?;
             let (bytes, cells) = bsp::encode(level, mode)
@@ -464,13 +471,7 @@ impl World {
     /// viewcells (`volumetric`) of a mesh level against the item-buffer truth sampled in
     /// their free voxels. Also returns the cut of a mesh level.
     pub fn judge(&self, m: Method, k: usize) -> anyhow::Result<(Judgement, Option<JudgedLevel>)> {
-        anyhow::ensure!(
-            on_level_cells(m) && m.works_on(self.kind),
-            "{} judges the cells of a level; {} is {}",
-            m.name(),
-            self.path.display(),
-            kind_word(self.kind)
-        );
+        self.ensure_level_method(m, "judges")?;
         if let Some(level) = &self.bsp {
             let mode = portal_mode(m).context("a BSP level is judged with a portal method")?;
             let portals: Portals = bsp::portals(level)?;
